@@ -1,0 +1,423 @@
+// Iterative LQR (thesis Sec. 2.2, Eqs. 2.1-2.22) on fixed-size Eigen.
+//
+// Model/data split: the Problem (dynamics, costs, limits; see problem.hpp) is immutable
+// during a solve; Ilqr owns one workspace sized at compile time by the problem's dimensions
+// and the horizon N, allocated once with the object. Nothing here allocates, throws or
+// dispatches virtually, so the same code runs in the actuator firmware and on the host.
+//
+// Improvements over the plain recursion, after iLQG (Tassa, Erez & Todorov, IROS 2012), as
+// the thesis does: Levenberg-Marquardt regularisation of Q_uu, a backtracking line search on
+// the feedforward term, and box limits on the controls handled as in box-DDP (a projected-
+// Newton QP per step, clamped directions removed from the feedback gain).
+//
+// Horizon convention: N control intervals, so N controls u_0..u_{N-1} and N+1 states
+// x_0..x_N, as in the sums of Eqs. 2.38-2.40.
+//
+// Size note: the workspace holds O(N (n^2 + n m)) scalars; keep large instances in static
+// storage or allocate them once at start-up, never on a small stack.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "hmpc/solver/box_qp.hpp"
+#include "hmpc/solver/problem.hpp"
+
+namespace hmpc {
+
+enum class SolveStatus : std::uint8_t {
+  kConverged = 0,     // cost reduction or gradient below tolerance
+  kIterationCap,      // config.max_iterations reached
+  kBudgetExhausted,   // the caller's iteration budget ran out or its stop predicate fired
+  kStalled,           // regularisation reached its maximum without finding a descent step
+  kInvalidInput,      // non-finite initial state: previous plan kept untouched
+  kNumericalFailure,  // the model produced non-finite values even from safe controls
+};
+
+inline const char* to_string(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::kConverged: return "converged";
+    case SolveStatus::kIterationCap: return "iteration-cap";
+    case SolveStatus::kBudgetExhausted: return "budget-exhausted";
+    case SolveStatus::kStalled: return "stalled";
+    case SolveStatus::kInvalidInput: return "invalid-input";
+    case SolveStatus::kNumericalFailure: return "numerical-failure";
+  }
+  return "unknown";
+}
+
+// True when the returned plan was computed for the given initial state and may be applied.
+inline bool plan_is_usable(SolveStatus status) {
+  return status != SolveStatus::kInvalidInput && status != SolveStatus::kNumericalFailure;
+}
+
+template <typename Scalar>
+struct IlqrConfig {
+  int max_iterations = 50;
+  // Converged when an accepted iteration lowers J by less than this (absolute, as iLQG's
+  // tolFun), or when the normalised feedforward |k| falls below gradient_tolerance.
+  Scalar tolerance = Scalar(1e-6);
+  Scalar gradient_tolerance = Scalar(1e-5);
+  // Levenberg-Marquardt term mu added to Q_uu; schedule of Tassa et al. 2012, Sec. II-F.
+  Scalar regularization_init = Scalar(1);
+  Scalar regularization_min = Scalar(1e-6);
+  Scalar regularization_max = Scalar(1e10);
+  Scalar regularization_factor = Scalar(1.6);
+  // Line search: alpha_i = 10^(-3 i / (steps - 1)), accepted when the actual over the
+  // expected reduction exceeds min_reduction_ratio.
+  int line_search_steps = 11;
+  Scalar min_reduction_ratio = Scalar(0);
+};
+
+template <typename Scalar>
+struct SolveResult {
+  SolveStatus status = SolveStatus::kInvalidInput;
+  int iterations = 0;                  // backward + forward passes performed
+  Scalar cost = Scalar(0);             // J of the returned plan
+  Scalar initial_cost = Scalar(0);     // J of the warm-start rollout
+  Scalar regularization = Scalar(0);   // mu after the solve
+};
+
+// Default stop predicate: never stops early. A caller with a deadline passes a functor that
+// reads its clock; it is checked before every iteration.
+struct NeverStop {
+  constexpr bool operator()() const { return false; }
+};
+
+template <class Problem, int N>
+class Ilqr {
+ public:
+  static_assert(N >= 1, "horizon must have at least one control interval");
+  using Scalar = typename Problem::Scalar;
+  static constexpr int kStateDim = Problem::kStateDim;
+  static constexpr int kControlDim = Problem::kControlDim;
+  static constexpr int kHorizon = N;
+  using State = Eigen::Matrix<Scalar, kStateDim, 1>;
+  using Control = Eigen::Matrix<Scalar, kControlDim, 1>;
+  using Gain = Eigen::Matrix<Scalar, kControlDim, kStateDim>;
+  using StateTrajectory = std::array<State, N + 1>;
+  using ControlTrajectory = std::array<Control, N>;
+  using GainTrajectory = std::array<Gain, N>;
+  using Config = IlqrConfig<Scalar>;
+  using Result = SolveResult<Scalar>;
+
+  explicit Ilqr(const Config& config = Config{}) : config_(config) { reset(); }
+
+  // Cold start: zero controls and gains, initial regularisation.
+  void reset() {
+    for (auto& u : u_) u.setZero();
+    for (auto& x : x_) x.setZero();
+    for (auto& k : k_) k.setZero();
+    for (auto& K : K_) K.setZero();
+    mu_ = config_.regularization_init;
+    dmu_ = Scalar(1);
+    cost_ = std::numeric_limits<Scalar>::infinity();
+  }
+
+  const Config& config() const { return config_; }
+  void set_config(const Config& config) { config_ = config; }
+
+  // Initial control sequence for the next solve (e.g. offline-optimised inputs, Fig. 2.2).
+  // Rejected, leaving the current plan, if any entry is not finite.
+  bool set_controls(const ControlTrajectory& controls) {
+    for (const auto& u : controls)
+      if (!u.allFinite()) return false;
+    u_ = controls;
+    return true;
+  }
+
+  void set_zero_controls() {
+    for (auto& u : u_) u.setZero();
+  }
+
+  // Warm start by time shift, Eq. 2.22: drop the first `steps` controls and repeat the last.
+  void shift(int steps = 1) {
+    if (steps <= 0) return;
+    if (steps > N) steps = N;
+    for (int t = 0; t < N; ++t) {
+      const int source = t + steps < N ? t + steps : N - 1;
+      u_[t] = u_[source];
+      K_[t] = K_[source];
+    }
+  }
+
+  Result solve(const Problem& problem, const State& x0) {
+    return solve(problem, x0, config_.max_iterations, NeverStop{});
+  }
+
+  // Solves from x0 starting at the current control sequence. At most
+  // min(iteration_budget, config.max_iterations) iterations; `stop()` is checked before each.
+  // The nominal trajectory only ever changes to one of lower cost, so whatever ends the
+  // solve, controls()/states() hold the best plan found.
+  template <class StopPredicate = NeverStop>
+  Result solve(const Problem& problem, const State& x0, int iteration_budget,
+               StopPredicate&& stop = StopPredicate{}) {
+    Result result;
+    if (!x0.allFinite()) {
+      result.status = SolveStatus::kInvalidInput;
+      result.cost = result.initial_cost = std::numeric_limits<Scalar>::quiet_NaN();
+      return result;
+    }
+    lower_ = problem.control_lower_bound();
+    upper_ = problem.control_upper_bound();
+    bounded_ = (lower_.array() > -std::numeric_limits<Scalar>::infinity()).any() ||
+               (upper_.array() < std::numeric_limits<Scalar>::infinity()).any();
+
+    // Eqs. 2.18-2.20 with alpha = 0 and no feedback: roll the warm start out from x0.
+    Scalar cost = rollout_open_loop(problem, x0);
+    if (!std::isfinite(cost)) {  // garbage warm start: fall back to the safe zero sequence
+      set_zero_controls();
+      cost = rollout_open_loop(problem, x0);
+    }
+    if (!std::isfinite(cost)) {
+      result.status = SolveStatus::kNumericalFailure;
+      result.cost = result.initial_cost = cost;
+      return result;
+    }
+    commit_candidate(cost);
+    result.initial_cost = cost_;
+
+    const int budget =
+        iteration_budget < config_.max_iterations ? iteration_budget : config_.max_iterations;
+    bool derivatives_valid = compute_derivatives(problem);
+    result.status = SolveStatus::kIterationCap;
+    while (true) {
+      if (!derivatives_valid) {
+        result.status = SolveStatus::kNumericalFailure;
+        break;
+      }
+      if (result.iterations >= budget) {
+        result.status = budget < config_.max_iterations ? SolveStatus::kBudgetExhausted
+                                                        : SolveStatus::kIterationCap;
+        break;
+      }
+      if (stop()) {
+        result.status = SolveStatus::kBudgetExhausted;
+        break;
+      }
+
+      // Backward pass, raising mu until Q_uu + mu I is positive definite (Eq. 2.11-2.16).
+      Scalar expected_linear = 0;
+      Scalar expected_quadratic = 0;
+      bool stalled = false;
+      while (!backward_pass(expected_linear, expected_quadratic)) {
+        if (!increase_regularization()) {
+          stalled = true;
+          break;
+        }
+      }
+      if (stalled) {
+        result.status = SolveStatus::kStalled;
+        break;
+      }
+      ++result.iterations;
+
+      if (feedforward_norm() < config_.gradient_tolerance && mu_ < Scalar(1e-5)) {
+        decrease_regularization();
+        result.status = SolveStatus::kConverged;
+        break;
+      }
+
+      // Forward pass with backtracking line search (Eqs. 2.18-2.20 with u + alpha k + K dx).
+      bool accepted = false;
+      Scalar reduction = 0;
+      for (int i = 0; i < config_.line_search_steps; ++i) {
+        const Scalar alpha = line_search_alpha(i);
+        const Scalar candidate_cost = rollout_closed_loop(problem, x0, alpha);
+        if (!std::isfinite(candidate_cost)) continue;
+        reduction = cost_ - candidate_cost;
+        const Scalar expected = -alpha * (expected_linear + alpha * expected_quadratic);
+        const Scalar ratio = expected > Scalar(0) ? reduction / expected
+                                                  : (reduction > Scalar(0) ? Scalar(1)
+                                                                           : Scalar(-1));
+        if (ratio > config_.min_reduction_ratio && reduction > Scalar(0)) {
+          commit_candidate(candidate_cost);
+          accepted = true;
+          break;
+        }
+      }
+
+      if (accepted) {
+        decrease_regularization();
+        if (reduction < config_.tolerance) {
+          result.status = SolveStatus::kConverged;
+          break;
+        }
+        derivatives_valid = compute_derivatives(problem);
+      } else if (!increase_regularization()) {
+        result.status = SolveStatus::kStalled;
+        break;
+      }
+    }
+    result.cost = cost_;
+    result.regularization = mu_;
+    return result;
+  }
+
+  const ControlTrajectory& controls() const { return u_; }
+  const StateTrajectory& states() const { return x_; }
+  const GainTrajectory& feedback_gains() const { return K_; }
+  Scalar cost() const { return cost_; }
+
+ private:
+  using RunningDerivatives = typename Problem::RunningDerivatives;
+  using TerminalDerivatives = typename Problem::TerminalDerivatives;
+  using StateJacobian = Eigen::Matrix<Scalar, kStateDim, kStateDim>;
+  using ControlJacobian = Eigen::Matrix<Scalar, kStateDim, kControlDim>;
+  using ControlMatrix = Eigen::Matrix<Scalar, kControlDim, kControlDim>;
+
+  Control clamp(const Control& u) const { return u.cwiseMax(lower_).cwiseMin(upper_); }
+
+  Scalar line_search_alpha(int i) const {
+    if (config_.line_search_steps <= 1) return Scalar(1);
+    using std::pow;
+    return pow(Scalar(10), Scalar(-3) * Scalar(i) / Scalar(config_.line_search_steps - 1));
+  }
+
+  // Trajectory cost, Eq. 2.2; +inf if any state or cost term is not finite.
+  Scalar candidate_cost(const Problem& problem) const {
+    Scalar cost = 0;
+    for (int t = 0; t < N; ++t) cost += problem.running_cost(x_new_[t], u_new_[t], t);
+    cost += problem.terminal_cost(x_new_[N]);
+    return std::isfinite(cost) ? cost : std::numeric_limits<Scalar>::infinity();
+  }
+
+  Scalar rollout_open_loop(const Problem& problem, const State& x0) {
+    x_new_[0] = x0;
+    for (int t = 0; t < N; ++t) {
+      u_new_[t] = clamp(u_[t]);
+      x_new_[t + 1] = problem.dynamics(x_new_[t], u_new_[t], t);
+      if (!x_new_[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
+    }
+    return candidate_cost(problem);
+  }
+
+  // Eq. 2.18-2.20 with the line-search step alpha on the feedforward term k_t of Eq. 2.12.
+  Scalar rollout_closed_loop(const Problem& problem, const State& x0, Scalar alpha) {
+    x_new_[0] = x0;
+    for (int t = 0; t < N; ++t) {
+      u_new_[t] = clamp(u_[t] + alpha * k_[t] + K_[t] * (x_new_[t] - x_[t]));
+      x_new_[t + 1] = problem.dynamics(x_new_[t], u_new_[t], t);
+      if (!x_new_[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
+    }
+    return candidate_cost(problem);
+  }
+
+  void commit_candidate(Scalar cost) {
+    x_ = x_new_;
+    u_ = u_new_;
+    cost_ = cost;
+  }
+
+  bool compute_derivatives(const Problem& problem) {
+    for (int t = 0; t < N; ++t) {
+      problem.dynamics_derivatives(x_[t], u_[t], t, fx_[t], fu_[t]);
+      problem.running_cost_derivatives(x_[t], u_[t], t, running_[t]);
+      if (!fx_[t].allFinite() || !fu_[t].allFinite() || !running_[t].lx.allFinite() ||
+          !running_[t].lu.allFinite() || !running_[t].lxx.allFinite() ||
+          !running_[t].luu.allFinite() || !running_[t].lux.allFinite())
+        return false;
+    }
+    problem.terminal_cost_derivatives(x_[N], terminal_);
+    return terminal_.lx.allFinite() && terminal_.lxx.allFinite();
+  }
+
+  // One backward sweep. Returns false when Q_uu + mu I is not positive definite at some step
+  // (or the result is not finite), in which case the caller raises mu and repeats.
+  bool backward_pass(Scalar& expected_linear, Scalar& expected_quadratic) {
+    expected_linear = 0;
+    expected_quadratic = 0;
+    State Vx = terminal_.lx;  // V_N = l_T (text after Eq. 2.16)
+    StateJacobian Vxx = terminal_.lxx;
+    for (int t = N - 1; t >= 0; --t) {
+      const StateJacobian& A = fx_[t];
+      const ControlJacobian& B = fu_[t];
+      const RunningDerivatives& l = running_[t];
+      const Eigen::Matrix<Scalar, kStateDim, kControlDim> VxxB = Vxx * B;
+      const State Qx = l.lx + A.transpose() * Vx;                               // Eq. 2.7
+      const Control Qu = l.lu + B.transpose() * Vx;                             // Eq. 2.8
+      const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;                // Eq. 2.9
+      const Gain Qux = l.lux + VxxB.transpose() * A;                            // Eq. 2.10
+      const ControlMatrix Quu = l.luu + B.transpose() * VxxB;                   // Eq. 2.11
+      const ControlMatrix Quu_reg = Quu + mu_ * ControlMatrix::Identity();      // LM term
+
+      if (bounded_) {
+        // box-DDP: k from the box QP around the nominal control; K on the free set only.
+        solve_box_qp(Quu_reg, Qu, Control(lower_ - u_[t]), Control(upper_ - u_[t]), k_[t],
+                     box_, box_config_);
+        if (!box_.usable()) return false;
+        k_[t] = box_.x;
+        for (int j = 0; j < kStateDim; ++j)
+          K_[t].col(j) = -box_.free_factor.solve(Qux.col(j).cwiseProduct(box_.free_mask));
+      } else {
+        llt_.compute(Quu_reg);
+        if (llt_.info() != Eigen::Success) return false;
+        k_[t] = -llt_.solve(Qu);                                                 // Eq. 2.12
+        for (int j = 0; j < kStateDim; ++j) K_[t].col(j) = -llt_.solve(Qux.col(j));
+      }
+      const Control& k = k_[t];
+      const Gain& K = K_[t];
+      if (!k.allFinite() || !K.allFinite()) return false;
+
+      expected_linear += k.dot(Qu);                                              // Eq. 2.14
+      expected_quadratic += Scalar(0.5) * k.dot(Quu * k);
+      // Eqs. 2.15-2.16 in the form that stays exact when k, K are not the unconstrained
+      // minimisers (clamped directions, regularisation): Tassa et al. 2012, Eq. 11.
+      Vx = Qx + K.transpose() * (Quu * k) + K.transpose() * Qu + Qux.transpose() * k;
+      Vxx = Qxx + K.transpose() * Quu * K + K.transpose() * Qux + Qux.transpose() * K;
+      Vxx = Scalar(0.5) * (Vxx + Vxx.transpose()).eval();
+    }
+    return true;
+  }
+
+  // Mean over the horizon of max_i |k_i| / (|u_i| + 1): iLQG's gradient-based stop.
+  Scalar feedforward_norm() const {
+    Scalar sum = 0;
+    for (int t = 0; t < N; ++t)
+      sum += (k_[t].array().abs() / (u_[t].array().abs() + Scalar(1))).maxCoeff();
+    return sum / Scalar(N);
+  }
+
+  bool increase_regularization() {
+    const Scalar f = config_.regularization_factor;
+    dmu_ = dmu_ * f > f ? dmu_ * f : f;
+    const Scalar next = mu_ * dmu_;
+    mu_ = next > config_.regularization_min ? next : config_.regularization_min;
+    return mu_ <= config_.regularization_max;
+  }
+
+  void decrease_regularization() {
+    const Scalar f = config_.regularization_factor;
+    dmu_ = dmu_ / f < Scalar(1) / f ? dmu_ / f : Scalar(1) / f;
+    mu_ = mu_ * dmu_;
+    if (mu_ < config_.regularization_min) mu_ = 0;
+  }
+
+  Config config_;
+  BoxQpConfig<Scalar> box_config_{};
+  Control lower_ = Control::Zero();
+  Control upper_ = Control::Zero();
+  bool bounded_ = false;
+  Scalar mu_ = 0;
+  Scalar dmu_ = 1;
+  Scalar cost_ = 0;
+
+  StateTrajectory x_;       // nominal (best so far)
+  ControlTrajectory u_;
+  StateTrajectory x_new_;   // line-search candidate
+  ControlTrajectory u_new_;
+  std::array<Control, N> k_;  // feedforward, Eq. 2.12
+  GainTrajectory K_;          // feedback, Eq. 2.12
+  std::array<StateJacobian, N> fx_;
+  std::array<ControlJacobian, N> fu_;
+  std::array<RunningDerivatives, N> running_;
+  TerminalDerivatives terminal_;
+  BoxQpSolution<Scalar, kControlDim> box_;
+  Eigen::LLT<ControlMatrix> llt_;
+};
+
+}  // namespace hmpc

@@ -1,0 +1,379 @@
+// Unit tests of the iLQR core (thesis Sec. 2.2): exactness on LQR problems, convergence on a
+// nonlinear swing-up, box limits, warm start, iteration budgets and bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "hmpc/mpc/receding_horizon_mpc.hpp"
+#include "hmpc/solver/ilqr.hpp"
+
+namespace {
+
+constexpr int kNx = 4;
+constexpr int kNu = 2;
+constexpr int kN = 30;
+using Vx = Eigen::Matrix<double, kNx, 1>;
+using Vu = Eigen::Matrix<double, kNu, 1>;
+using Mxx = Eigen::Matrix<double, kNx, kNx>;
+using Mxu = Eigen::Matrix<double, kNx, kNu>;
+using Muu = Eigen::Matrix<double, kNu, kNu>;
+using Mux = Eigen::Matrix<double, kNu, kNx>;
+
+struct LqData {
+  Mxx A, Q, Qf;
+  Mxu B;
+  Muu R;
+  Vu lower = Vu::Constant(-std::numeric_limits<double>::infinity());
+  Vu upper = Vu::Constant(std::numeric_limits<double>::infinity());
+};
+
+LqData random_lq(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  LqData d;
+  for (int i = 0; i < kNx; ++i)
+    for (int j = 0; j < kNx; ++j) d.A(i, j) = (i == j ? 1.0 : 0.0) + 0.15 * n(rng);
+  for (int i = 0; i < kNx; ++i)
+    for (int j = 0; j < kNu; ++j) d.B(i, j) = 0.5 * n(rng);
+  Mxx L;
+  for (int i = 0; i < kNx; ++i)
+    for (int j = 0; j < kNx; ++j) L(i, j) = n(rng);
+  d.Q = L * L.transpose() * 0.1 + Mxx::Identity();
+  d.Qf = 5.0 * d.Q;
+  d.R = Muu::Identity() * 0.3;
+  d.R(0, 1) = d.R(1, 0) = 0.05;
+  return d;
+}
+
+// Linear dynamics, quadratic cost. FdLq leaves the derivatives to the finite-difference
+// defaults of ProblemBase; AnalyticLq supplies them.
+template <class Self>
+class LqBase : public hmpc::ProblemBase<Self, double, kNx, kNu> {
+ public:
+  explicit LqBase(const LqData& d) : d_(d) {}
+  Vx dynamics(const Vx& x, const Vu& u, int) const { return d_.A * x + d_.B * u; }
+  double running_cost(const Vx& x, const Vu& u, int) const {
+    return 0.5 * x.dot(d_.Q * x) + 0.5 * u.dot(d_.R * u);
+  }
+  double terminal_cost(const Vx& x) const { return 0.5 * x.dot(d_.Qf * x); }
+  Vu control_lower_bound() const { return d_.lower; }
+  Vu control_upper_bound() const { return d_.upper; }
+
+ protected:
+  const LqData& d_;
+};
+
+class FdLq : public LqBase<FdLq> {
+ public:
+  using LqBase<FdLq>::LqBase;
+};
+
+class AnalyticLq : public LqBase<AnalyticLq> {
+ public:
+  using LqBase<AnalyticLq>::LqBase;
+  void dynamics_derivatives(const Vx&, const Vu&, int, Mxx& fx, Mxu& fu) const {
+    fx = d_.A;
+    fu = d_.B;
+  }
+  void running_cost_derivatives(const Vx& x, const Vu& u, int, RunningDerivatives& l) const {
+    l.lx = d_.Q * x;
+    l.lu = d_.R * u;
+    l.lxx = d_.Q;
+    l.luu = d_.R;
+    l.lux.setZero();
+  }
+  void terminal_cost_derivatives(const Vx& x, TerminalDerivatives& l) const {
+    l.lx = d_.Qf * x;
+    l.lxx = d_.Qf;
+  }
+};
+
+// Finite-horizon discrete Riccati recursion: u_t = K_t x_t.
+struct RiccatiSolution {
+  std::array<Mux, kN> K;
+  std::array<Vu, kN> u;
+  std::array<Vx, kN + 1> x;
+};
+RiccatiSolution riccati(const LqData& d, const Vx& x0) {
+  RiccatiSolution s;
+  Mxx P = d.Qf;
+  for (int t = kN - 1; t >= 0; --t) {
+    const Muu H = d.R + d.B.transpose() * P * d.B;
+    s.K[t] = -H.ldlt().solve(d.B.transpose() * P * d.A);
+    P = d.Q + d.A.transpose() * P * (d.A + d.B * s.K[t]);
+    P = 0.5 * (P + P.transpose()).eval();
+  }
+  s.x[0] = x0;
+  for (int t = 0; t < kN; ++t) {
+    s.u[t] = s.K[t] * s.x[t];
+    s.x[t + 1] = d.A * s.x[t] + d.B * s.u[t];
+  }
+  return s;
+}
+
+hmpc::IlqrConfig<double> exact_newton_config() {
+  hmpc::IlqrConfig<double> c;
+  c.regularization_init = 0;  // plain Newton: one step solves an LQR problem exactly
+  c.tolerance = 1e-12;
+  return c;
+}
+
+TEST(IlqrLqr, MatchesRiccatiWithAnalyticDerivatives) {
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    const LqData d = random_lq(seed);
+    const AnalyticLq problem(d);
+    hmpc::Ilqr<AnalyticLq, kN> solver(exact_newton_config());
+    const Vx x0(1.0, -2.0, 0.5, 3.0);
+    const auto result = solver.solve(problem, x0);
+    ASSERT_EQ(result.status, hmpc::SolveStatus::kConverged) << "seed " << seed;
+    const RiccatiSolution ref = riccati(d, x0);
+    for (int t = 0; t < kN; ++t) {
+      EXPECT_LT((solver.controls()[t] - ref.u[t]).norm(), 1e-9 * (1 + ref.u[t].norm()))
+          << "seed " << seed << " t " << t;
+      EXPECT_LT((solver.feedback_gains()[t] - ref.K[t]).norm(), 1e-9 * (1 + ref.K[t].norm()))
+          << "seed " << seed << " t " << t;
+    }
+    EXPECT_LE(result.iterations, 2);
+  }
+}
+
+TEST(IlqrLqr, FiniteDifferenceDerivativesAgreeWithRiccati) {
+  const LqData d = random_lq(7);
+  const FdLq problem(d);
+  hmpc::Ilqr<FdLq, kN> solver(exact_newton_config());
+  const Vx x0(1.0, -2.0, 0.5, 3.0);
+  solver.solve(problem, x0);
+  const RiccatiSolution ref = riccati(d, x0);
+  for (int t = 0; t < kN; ++t)
+    EXPECT_LT((solver.controls()[t] - ref.u[t]).norm(), 1e-5 * (1 + ref.u[t].norm()));
+}
+
+TEST(IlqrLqr, RegularisedStartStillReachesRiccati) {
+  const LqData d = random_lq(3);
+  const AnalyticLq problem(d);
+  hmpc::IlqrConfig<double> config;  // default mu_init = 1: damped first steps
+  config.tolerance = 1e-14;
+  config.gradient_tolerance = 1e-12;
+  config.max_iterations = 200;
+  hmpc::Ilqr<AnalyticLq, kN> solver(config);
+  const Vx x0(1.0, -2.0, 0.5, 3.0);
+  solver.solve(problem, x0);
+  const RiccatiSolution ref = riccati(d, x0);
+  for (int t = 0; t < kN; ++t)
+    EXPECT_LT((solver.controls()[t] - ref.u[t]).norm(), 1e-9 * (1 + ref.u[t].norm()));
+}
+
+// Box limits: every returned control lies inside its bounds, and the bounds are active.
+TEST(IlqrBox, LimitsNeverViolated) {
+  for (unsigned seed = 11; seed <= 15; ++seed) {
+    LqData d = random_lq(seed);
+    const Vx x0(3.0, -4.0, 2.0, 5.0);
+    const RiccatiSolution free = riccati(d, x0);
+    double largest = 0;
+    for (const auto& u : free.u) largest = std::max(largest, u.cwiseAbs().maxCoeff());
+    d.lower = Vu::Constant(-0.3 * largest);
+    d.upper = Vu::Constant(0.25 * largest);
+    const AnalyticLq problem(d);
+    hmpc::Ilqr<AnalyticLq, kN> solver;
+    const auto result = solver.solve(problem, x0);
+    EXPECT_TRUE(hmpc::plan_is_usable(result.status));
+    int active = 0;
+    for (const auto& u : solver.controls()) {
+      for (int i = 0; i < kNu; ++i) {
+        EXPECT_GE(u(i), d.lower(i)) << "seed " << seed;
+        EXPECT_LE(u(i), d.upper(i)) << "seed " << seed;
+        active += (u(i) == d.lower(i) || u(i) == d.upper(i));
+      }
+    }
+    EXPECT_GT(active, 0) << "bounds chosen to be active";
+    EXPECT_LT(result.cost, result.initial_cost);
+    // Clamped directions carry no feedback (box-DDP).
+    for (int t = 0; t < kN; ++t)
+      for (int i = 0; i < kNu; ++i) {
+        const double u = solver.controls()[t](i);
+        if (u == d.lower(i) || u == d.upper(i)) {
+          EXPECT_EQ(solver.feedback_gains()[t].row(i).norm(), 0.0);
+        }
+      }
+  }
+}
+
+// Torque-limited pendulum: theta'' = -(g/l) sin(theta) - b theta' + u / (m l^2).
+class Pendulum : public hmpc::ProblemBase<Pendulum, double, 2, 1> {
+ public:
+  static constexpr double kDt = 0.05, kG = 9.81, kL = 1.0, kM = 1.0, kB = 0.1;
+  double torque_limit = 2.0;  // below m g l: a swing-up needs pumping
+  State dynamics(const State& x, const Control& u, int) const {
+    const double acc = -kG / kL * std::sin(x(0)) - kB * x(1) + u(0) / (kM * kL * kL);
+    return State(x(0) + kDt * x(1), x(1) + kDt * acc);
+  }
+  void dynamics_derivatives(const State& x, const Control&, int, StateJacobian& fx,
+                            ControlJacobian& fu) const {
+    fx << 1.0, kDt, -kDt * kG / kL * std::cos(x(0)), 1.0 - kDt * kB;
+    fu << 0.0, kDt / (kM * kL * kL);
+  }
+  double running_cost(const State& x, const Control& u, int) const {
+    return 0.01 * u.squaredNorm() + 0.001 * goal_error(x);
+  }
+  double terminal_cost(const State& x) const { return 100.0 * goal_error(x); }
+  Control control_lower_bound() const { return Control(-torque_limit); }
+  Control control_upper_bound() const { return Control(torque_limit); }
+
+ private:
+  static double goal_error(const State& x) {
+    return (x(0) - M_PI) * (x(0) - M_PI) + 0.1 * x(1) * x(1);
+  }
+};
+
+TEST(IlqrPendulum, SwingUpConvergesWithinTorqueLimit) {
+  Pendulum problem;
+  hmpc::IlqrConfig<double> config;
+  config.max_iterations = 300;
+  config.tolerance = 1e-8;
+  hmpc::Ilqr<Pendulum, 100> solver(config);
+  const auto result = solver.solve(problem, Pendulum::State(0.0, 0.0));
+  EXPECT_EQ(result.status, hmpc::SolveStatus::kConverged);
+  const auto& xN = solver.states()[100];
+  EXPECT_NEAR(xN(0), M_PI, 0.05);
+  EXPECT_NEAR(xN(1), 0.0, 0.2);
+  double peak = 0;
+  for (const auto& u : solver.controls()) {
+    EXPECT_LE(std::abs(u(0)), problem.torque_limit);
+    peak = std::max(peak, std::abs(u(0)));
+  }
+  EXPECT_DOUBLE_EQ(peak, problem.torque_limit) << "the limit binds during the swing-up";
+  // The plan is dynamically consistent: rolling its controls out reproduces its states.
+  Pendulum::State x(0.0, 0.0);
+  for (int t = 0; t < 100; ++t) x = problem.dynamics(x, solver.controls()[t], t);
+  EXPECT_LT((x - xN).norm(), 1e-12);
+}
+
+TEST(IlqrBudget, IterationBudgetIsHonouredAndPlanImproves) {
+  Pendulum problem;
+  for (int budget : {1, 2, 3, 5}) {
+    hmpc::Ilqr<Pendulum, 100> solver;
+    const auto result = solver.solve(problem, Pendulum::State(0.0, 0.0), budget);
+    EXPECT_EQ(result.iterations, budget);
+    EXPECT_EQ(result.status, hmpc::SolveStatus::kBudgetExhausted);
+    EXPECT_LT(result.cost, result.initial_cost);
+    EXPECT_DOUBLE_EQ(result.cost, solver.cost());
+  }
+}
+
+TEST(IlqrBudget, StopPredicateEndsTheSolveWithTheBestPlan) {
+  Pendulum problem;
+  hmpc::Ilqr<Pendulum, 100> solver;
+  int checks = 0;
+  const auto result = solver.solve(problem, Pendulum::State(0.0, 0.0), 1000,
+                                   [&checks] { return ++checks > 4; });
+  EXPECT_EQ(result.status, hmpc::SolveStatus::kBudgetExhausted);
+  EXPECT_EQ(result.iterations, 4);
+  EXPECT_LT(result.cost, result.initial_cost);
+}
+
+TEST(IlqrWarmStart, TimeShiftCutsIterations) {
+  // Receding-horizon swing-up and balance, with and without the shift of Eq. 2.22.
+  Pendulum problem;
+  hmpc::IlqrConfig<double> config;
+  config.max_iterations = 100;
+  config.tolerance = 1e-6;
+  hmpc::Ilqr<Pendulum, 60> warm(config), cold(config);
+  Pendulum::State x_warm(0.0, 0.0), x_cold(0.0, 0.0);
+  int warm_iterations = 0, cold_iterations = 0;
+  for (int k = 0; k < 40; ++k) {
+    warm_iterations += warm.solve(problem, x_warm).iterations;
+    x_warm = problem.dynamics(x_warm, warm.controls()[0], 0);
+    warm.shift(1);
+    cold.reset();
+    cold_iterations += cold.solve(problem, x_cold).iterations;
+    x_cold = problem.dynamics(x_cold, cold.controls()[0], 0);
+  }
+  EXPECT_LT(warm_iterations * 2, cold_iterations)
+      << "warm " << warm_iterations << " cold " << cold_iterations;
+}
+
+TEST(IlqrWarmStart, ShiftRepeatsTheLastControl) {
+  Pendulum problem;
+  hmpc::Ilqr<Pendulum, 10> solver;
+  solver.solve(problem, Pendulum::State(0.3, 0.0));
+  const auto before = solver.controls();
+  solver.shift(3);
+  for (int t = 0; t < 7; ++t) EXPECT_EQ(solver.controls()[t], before[t + 3]);
+  for (int t = 7; t < 10; ++t) EXPECT_EQ(solver.controls()[t], before[9]);
+}
+
+TEST(IlqrBadInput, NonFiniteInitialStateKeepsThePreviousPlan) {
+  Pendulum problem;
+  hmpc::Ilqr<Pendulum, 50> solver;
+  solver.solve(problem, Pendulum::State(0.1, 0.0));
+  const auto plan = solver.controls();
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::infinity()}) {
+    const auto result = solver.solve(problem, Pendulum::State(bad, 0.0));
+    EXPECT_EQ(result.status, hmpc::SolveStatus::kInvalidInput);
+    EXPECT_FALSE(hmpc::plan_is_usable(result.status));
+    for (int t = 0; t < 50; ++t) EXPECT_EQ(solver.controls()[t], plan[t]);
+  }
+}
+
+TEST(IlqrBadInput, NonFiniteWarmStartIsRejected) {
+  Pendulum problem;
+  hmpc::Ilqr<Pendulum, 50> solver;
+  hmpc::Ilqr<Pendulum, 50>::ControlTrajectory garbage{};
+  garbage[7](0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(solver.set_controls(garbage));
+  const auto result = solver.solve(problem, Pendulum::State(0.1, 0.0));
+  EXPECT_TRUE(hmpc::plan_is_usable(result.status));
+  for (const auto& u : solver.controls()) EXPECT_TRUE(u.allFinite());
+}
+
+// A model that blows up (NaN) beyond a state region, and one whose cost is NaN everywhere.
+class Fragile : public hmpc::ProblemBase<Fragile, double, 1, 1> {
+ public:
+  bool poisoned_cost = false;
+  State dynamics(const State& x, const Control& u, int) const {
+    const State next(x(0) + 0.1 * u(0));
+    return std::abs(next(0)) > 2.0 ? State(std::numeric_limits<double>::quiet_NaN()) : next;
+  }
+  double running_cost(const State& x, const Control& u, int) const {
+    return poisoned_cost ? std::numeric_limits<double>::quiet_NaN()
+                         : (x(0) - 5.0) * (x(0) - 5.0) + 1e-4 * u.squaredNorm();
+  }
+  double terminal_cost(const State& x) const { return 10 * (x(0) - 5.0) * (x(0) - 5.0); }
+};
+
+TEST(IlqrBadInput, NonFiniteModelOutputNeverReachesThePlan) {
+  Fragile problem;  // the target x = 5 lies in the region where the model returns NaN
+  hmpc::Ilqr<Fragile, 40> solver;
+  const auto result = solver.solve(problem, Fragile::State(0.0));
+  EXPECT_TRUE(std::isfinite(result.cost));
+  for (const auto& u : solver.controls()) EXPECT_TRUE(u.allFinite());
+  for (const auto& x : solver.states()) {
+    EXPECT_TRUE(x.allFinite());
+    EXPECT_LE(std::abs(x(0)), 2.0);
+  }
+  problem.poisoned_cost = true;
+  const auto poisoned = solver.solve(problem, Fragile::State(0.0));
+  EXPECT_EQ(poisoned.status, hmpc::SolveStatus::kNumericalFailure);
+  for (const auto& u : solver.controls()) EXPECT_TRUE(u.allFinite());
+}
+
+TEST(RecedingHorizonMpc, ShiftsOncePerModelStep) {
+  Pendulum problem;
+  using Mpc = hmpc::RecedingHorizonMpc<Pendulum, 20>;
+  // With an iteration cap of 0 nothing is re-optimised online: the plan only moves by the
+  // shift of Eq. 2.22, once every 5 samples.
+  Mpc frozen(problem, {5, [] {
+                         hmpc::IlqrConfig<double> c;
+                         c.max_iterations = 0;
+                         return c;
+                       }()});
+  frozen.initialize(Pendulum::State(0.2, 0.0), 100);
+  const auto plan = frozen.solver().controls();
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(frozen.update(Pendulum::State(0.2, 0.0)), plan[0]);
+  EXPECT_EQ(frozen.update(Pendulum::State(0.2, 0.0)), plan[1]);
+}
+
+}  // namespace
