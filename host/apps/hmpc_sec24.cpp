@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
       if (trial == 0) first = std::move(r);
     }
     double iterations = 0;
-    for (const auto& s : first.steps) iterations += s.upper_iterations + s.fast_iterations;
+    for (const auto& s : first.steps) iterations += s.iterations;
     iterations /= static_cast<double>(first.steps.size());
     std::printf("%-12s %8.4f %8.4f %12.5f %8.3f±%-5.3f %8.4f±%-5.4f %10.2f %9d\n",
                 to_string(method), first.final_y, first.final_z, first.accumulated_cost,

@@ -25,65 +25,48 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using M = Mpcs<double>;
 
-template <class Mpc>
-void record_layers(const Mpc& mpc, StepRecord& step) {
-  if constexpr (std::is_same_v<Mpc, M::Fine> || std::is_same_v<Mpc, M::Coarse>) {
-    step.upper_iterations = mpc.last_result().iterations;
-    step.upper_status = mpc.last_result().status;
-  } else {
-    step.upper_iterations = mpc.last_upper_result().iterations;
-    step.upper_status = mpc.last_upper_result().status;
-    step.fast_iterations = mpc.last_fast_result().iterations;
-    step.fast_status = mpc.last_fast_result().status;
-  }
-}
+// Times every update and appends to a log reserved in advance (no allocation in the loop).
+struct Recorder {
+  RunResult& result;
+  Clock::time_point start{};
 
-template <class Mpc>
-RunResult run_loop(Mpc& mpc, Method method, const RunOptions& options) {
-  const Parameters<double> p;
-  RunResult result;
-  result.method = method;
-  result.steps.reserve(static_cast<std::size_t>(options.samples));
+  void before_update(int) { start = Clock::now(); }
 
-  Vector2<double> x = initial_state<double>();
-  mpc.initialize(x, kOfflineIterations);
-  for (int k = 0; k < options.samples; ++k) {
-    const auto t0 = Clock::now();
-    const Vector2<double> u = mpc.update(x);
-    const auto t1 = Clock::now();
-
+  template <class Mpc>
+  void after_update(int k, const Vector2<double>& x, const Vector2<double>& u, const Mpc& mpc) {
+    const auto end = Clock::now();
     StepRecord step;
     step.time = k * kSamplingPeriod;
     step.y = x(0);
     step.z = x(1);
     step.u1 = u(0);
     step.u2 = u(1);
-    step.solve_seconds = std::chrono::duration<double>(t1 - t0).count();
-    record_layers(mpc, step);
-    if (!plan_is_usable(step.upper_status) || !plan_is_usable(step.fast_status))
-      ++result.unusable_solves;
+    step.solve_seconds = std::chrono::duration<double>(end - start).count();
+    step.iterations = mpc.last_iterations();
+    step.plan_usable = mpc.last_plan_usable();
+    result.unusable_solves += step.plan_usable ? 0 : 1;
     result.steps.push_back(step);
-
-    result.accumulated_cost += regulator_cost(p, x, u) * kSamplingPeriod;
-    x = integrate_plant(p, x, u, kSamplingPeriod);
   }
-  result.final_y = x(0);
-  result.final_z = x(1);
+};
+
+template <class Mpc>
+RunResult run_owned(std::unique_ptr<Mpc> mpc, Method method, const RunOptions& options) {
+  RunResult result;
+  result.method = method;
+  result.steps.reserve(static_cast<std::size_t>(options.samples));
+  Recorder recorder{result};
+  const auto outcome = simulate_closed_loop<double>(*mpc, options.samples, recorder);
+  result.final_y = outcome.final_state(0);
+  result.final_z = outcome.final_state(1);
+  result.accumulated_cost = outcome.accumulated_cost;
 
   std::vector<double> times;
   times.reserve(result.steps.size());
   for (const auto& s : result.steps) times.push_back(s.solve_seconds);
-  if (!times.empty()) {
-    result.max_solve_seconds = *std::max_element(times.begin(), times.end());
-    std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
-    result.median_solve_seconds = times[times.size() / 2];
-  }
+  result.max_solve_seconds = *std::max_element(times.begin(), times.end());
+  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+  result.median_solve_seconds = times[times.size() / 2];
   return result;
-}
-
-template <class Mpc>
-RunResult run_owned(std::unique_ptr<Mpc> mpc, Method method, const RunOptions& options) {
-  return run_loop(*mpc, method, options);
 }
 
 }  // namespace
@@ -107,13 +90,12 @@ RunResult run(Method method, const RunOptions& options) {
 void write_trajectories_csv(const std::vector<RunResult>& runs, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out << "method,time,y,z,u1,u2,solve_ms,upper_iterations,fast_iterations\n";
+  out << "method,time,y,z,u1,u2,solve_ms,iterations\n";
   out.precision(10);
   for (const auto& run : runs)
     for (const auto& s : run.steps)
       out << to_string(run.method) << ',' << s.time << ',' << s.y << ',' << s.z << ',' << s.u1
-          << ',' << s.u2 << ',' << s.solve_seconds * 1e3 << ',' << s.upper_iterations << ','
-          << s.fast_iterations << '\n';
+          << ',' << s.u2 << ',' << s.solve_seconds * 1e3 << ',' << s.iterations << '\n';
   if (!out) throw std::runtime_error("error while writing " + path);
 }
 

@@ -74,4 +74,30 @@ struct Mpcs {
   }
 };
 
+template <typename Scalar>
+struct ClosedLoopOutcome {
+  Vector2<Scalar> final_state;
+  Scalar accumulated_cost;  // sum over samples of the stage cost of Eq. 2.38 times Delta t
+};
+
+// The closed loop of Sec. 2.4.1: Algorithm 1's offline initialisation, then one MPC update
+// per 1 ms sample on the plant of Eq. 2.37. The observer sees each update:
+//   observer.before_update(k);  observer.after_update(k, x, u, mpc);
+template <typename Scalar, class Mpc, class Observer>
+ClosedLoopOutcome<Scalar> simulate_closed_loop(Mpc& mpc, int samples, Observer& observer) {
+  const Parameters<Scalar> p;
+  const Scalar dt = Scalar(kSamplingPeriod);
+  Vector2<Scalar> x = initial_state<Scalar>();
+  Scalar cost = 0;
+  mpc.initialize(x, kOfflineIterations);
+  for (int k = 0; k < samples; ++k) {
+    observer.before_update(k);
+    const Vector2<Scalar> u = mpc.update(x);
+    observer.after_update(k, x, u, mpc);
+    cost += regulator_cost(p, x, u) * dt;
+    x = integrate_plant(p, x, u, dt);
+  }
+  return {x, cost};
+}
+
 }  // namespace hmpc::sec24

@@ -32,6 +32,8 @@ class RecedingHorizonMpc {
   const Problem& problem() const { return problem_; }
   const Solver& solver() const { return solver_; }
   const Result& last_result() const { return result_; }
+  int last_iterations() const { return result_.iterations; }
+  bool last_plan_usable() const { return plan_is_usable(result_.status); }
 
   // Offline optimisation of the initial input sequence (Algorithm 1, line 1; Fig. 2.2).
   Result initialize(const State& x0, int offline_iterations) {

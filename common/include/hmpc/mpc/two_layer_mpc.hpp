@@ -79,6 +79,10 @@ class TwoLayerMpc {
   const FastSolver& fast_solver() const { return fast_solver_; }
   const UpperResult& last_upper_result() const { return upper_result_; }
   const FastResult& last_fast_result() const { return fast_result_; }
+  int last_iterations() const { return upper_result_.iterations + fast_result_.iterations; }
+  bool last_plan_usable() const {
+    return plan_is_usable(upper_result_.status) && plan_is_usable(fast_result_.status);
+  }
 
   // Algorithm 1, line 1: the initial input sequence of the upper layer optimised offline.
   UpperResult initialize(const FullState& x0, int offline_iterations) {

@@ -5,8 +5,6 @@
 #include <string>
 #include <vector>
 
-#include "hmpc/solver/ilqr.hpp"
-
 namespace hmpc::sec24 {
 
 enum class Method { kFine, kCoarse, kSlowFast, kCoarseFast };
@@ -19,10 +17,8 @@ struct StepRecord {
   double y = 0, z = 0;     // plant state at the start of the sample
   double u1 = 0, u2 = 0;   // applied input
   double solve_seconds = 0;
-  int upper_iterations = 0;  // the only layer for Fine/Coarse
-  int fast_iterations = 0;
-  SolveStatus upper_status = SolveStatus::kConverged;
-  SolveStatus fast_status = SolveStatus::kConverged;
+  int iterations = 0;        // iLQR iterations of all layers in this update
+  bool plan_usable = true;
 };
 
 struct RunResult {
@@ -43,7 +39,7 @@ struct RunOptions {
 // reserved before the first sample.
 RunResult run(Method method, const RunOptions& options = {});
 
-// CSV with one row per sample: method,time,y,z,u1,u2,solve_ms,upper_iter,fast_iter.
+// CSV with one row per sample: method,time,y,z,u1,u2,solve_ms,iterations.
 void write_trajectories_csv(const std::vector<RunResult>& runs, const std::string& path);
 
 }  // namespace hmpc::sec24
