@@ -180,6 +180,12 @@ class Ilqr {
     }
     commit_candidate(cost);
     result.initial_cost = cost_;
+    // mu carries over between receding-horizon solves, but never above its initial value:
+    // a previous stall must not leave the solver stalled.
+    if (mu_ > config_.regularization_init) {
+      mu_ = config_.regularization_init;
+      dmu_ = Scalar(1);
+    }
 
     const int budget =
         iteration_budget < config_.max_iterations ? iteration_budget : config_.max_iterations;
@@ -216,7 +222,11 @@ class Ilqr {
       }
       ++result.iterations;
 
-      if (feedforward_norm() < config_.gradient_tolerance && mu_ < Scalar(1e-5)) {
+      // Converged when the feedforward is negligible (iLQG) or the quadratic model predicts
+      // less improvement than the tolerance: nothing a line search could still resolve.
+      const Scalar predicted = -(expected_linear + expected_quadratic);
+      if ((feedforward_norm() < config_.gradient_tolerance && mu_ < Scalar(1e-5)) ||
+          predicted < config_.tolerance) {
         decrease_regularization();
         result.status = SolveStatus::kConverged;
         break;
