@@ -54,7 +54,7 @@ TEST(Sec24, SlowFastDoesNotBringYToItsTarget) {
   // Fig. 2.3: the slow subsystem mispredicts y where Eq. 2.25 has no unique root.
   const RunResult& slow_fast = runs().at(Method::kSlowFast);
   const RunResult& fine = runs().at(Method::kFine);
-  EXPECT_LT(slow_fast.final_y, 0.9);
+  EXPECT_GT(std::abs(slow_fast.final_y - 1.0), 0.1);
   EXPECT_GT(std::abs(slow_fast.final_y - 1.0), 5 * std::abs(fine.final_y - 1.0));
   EXPECT_GT(rms_to_fine(Method::kSlowFast, false), 0.2);
   EXPECT_GT(slow_fast.accumulated_cost, 1.5 * fine.accumulated_cost);
