@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package hmpc needs to build, test and run its demo: host and
+# cross toolchains, libraries, emulators and plotting. Idempotent and non-interactive: only
+# missing packages are installed, and nothing is fetched when none is missing.
+set -euo pipefail
+
+packages=(
+  # host build
+  g++ cmake ninja-build make pkgconf
+  # libraries
+  libeigen3-dev googletest libgtest-dev libbenchmark-dev
+  # bare-metal Cortex-M (newlib-nano, libstdc++ for newlib)
+  gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
+  # ARM64 Linux cross toolchain
+  g++-aarch64-linux-gnu
+  # emulators: Cortex-M boards (mps2-an500/an386) and ARM64 user mode
+  qemu-system-arm qemu-user
+  # plots of the demo and scenarios
+  gnuplot-nox
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup-debian: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+if [ "$(id -u)" -eq 0 ]; then
+  as_root=()
+elif command -v sudo >/dev/null 2>&1; then
+  as_root=(sudo)
+else
+  echo "setup-debian: missing packages (${missing[*]}) and neither root nor sudo" >&2
+  exit 1
+fi
+
+echo "setup-debian: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${as_root[@]}" apt-get update -qq
+"${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
