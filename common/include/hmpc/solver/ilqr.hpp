@@ -116,6 +116,11 @@ class Ilqr {
     mu_ = config_.regularization_init;
     dmu_ = Scalar(1);
     cost_ = std::numeric_limits<Scalar>::infinity();
+    // Factorisations start valid, so the solver object can be copied before its first solve.
+    llt_.compute(ControlMatrix::Identity());
+    box_.free_factor.compute(ControlMatrix::Identity());
+    box_.x.setZero();
+    box_.free_mask.setOnes();
   }
 
   const Config& config() const { return config_; }
