@@ -143,11 +143,7 @@ class Ilqr {
   void shift(int steps = 1) {
     if (steps <= 0) return;
     if (steps > N) steps = N;
-    for (int t = 0; t < N; ++t) {
-      const int source = t + steps < N ? t + steps : N - 1;
-      u_[t] = u_[source];
-      K_[t] = K_[source];
-    }
+    for (int t = 0; t < N; ++t) u_[t] = u_[t + steps < N ? t + steps : N - 1];
   }
 
   Result solve(const Problem& problem, const State& x0) {
