@@ -17,6 +17,11 @@ packages=(
   qemu-system-arm qemu-user
   # plots of the demo and scenarios
   gnuplot-nox
+  # vcan launcher (hil/vcan): a guest booting Debian's stock kernel when the host kernel has
+  # no CAN; kernel payload and modules may be xz- or zstd-compressed
+  qemu-system-x86 busybox-static iproute2 xz-utils zstd
+  # CAN inspection tools (candump, cansend, cangen) for debugging on vcan or a real bus
+  can-utils
 )
 
 missing=()

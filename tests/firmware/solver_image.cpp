@@ -1,12 +1,14 @@
-// Cortex-M test image: the Sec. 2.4 MPCs closed loop on the target's FPU, reporting results
-// (exact bits) for comparison with the host and instructions per MPC update counted by
-// SysTick under QEMU -icount shift=0.
+// Cortex-M test image: closed-loop MPC runs (selected by HMPC_RUNS_HEADER) on the target's
+// FPU, reporting results (exact bits) for comparison with the host, and instructions per MPC
+// update with the solver's work counters, counted by SysTick under QEMU -icount shift=0.
+// Output lines: "update <instructions> <upper rollout> <upper derivative> <fast rollout>
+// <fast derivative>" (solver work in steps) for each update of a run, then "result/count/instructions <method> ..." when the run ends.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 #include "console.hpp"
-#include "sec24_runs.hpp"
+#include HMPC_RUNS_HEADER
 
 #ifndef HMPC_SCALAR
 #define HMPC_SCALAR double
@@ -25,13 +27,14 @@ extern "C" [[noreturn]] void hmpc_fatal(const char* what) {
 
 namespace {
 
+using hmpc::closed_loop_check::kSamples;
 using hmpc::qemu::Console;
 using hmpc::qemu::InstructionCounter;
 
 Console console;
 InstructionCounter counter;
 std::uint64_t instructions_per_tick_x1000 = 0;
-std::uint32_t update_instructions[hmpc::sec24::kSamples];
+std::uint32_t update_instructions[kSamples];
 
 // Exactly two instructions per iteration: calibrates instructions per SysTick tick.
 __attribute__((noinline)) void spin(std::uint32_t n) {
@@ -41,38 +44,45 @@ __attribute__((noinline)) void spin(std::uint32_t n) {
 struct TickObserver {
   std::uint64_t start = 0;
   void before_update(int) { start = counter.ticks(); }
-  template <class Vector, class Mpc>
-  void after_update(int k, const Vector&, const Vector&, const Mpc&) {
+  template <class State, class Control, class Mpc>
+  void after_update(int k, const State&, const Control&, const Mpc& mpc) {
     const std::uint64_t ticks = counter.ticks() - start;
-    update_instructions[k] = static_cast<std::uint32_t>(ticks * instructions_per_tick_x1000 / 1000);
+    const auto instructions =
+        static_cast<std::uint32_t>(ticks * instructions_per_tick_x1000 / 1000);
+    update_instructions[k] = instructions;
+    const hmpc::LayerWork w = mpc.last_work();
+    console << "update " << instructions << " " << w.upper.rollout_steps << " "
+            << w.upper.derivative_steps << " " << w.fast.rollout_steps << " "
+            << w.fast.derivative_steps;
+    console.end_line();
   }
 };
 
 struct Report {
   bool ok = true;
-  template <class Outcome>
-  void method(const char* name, const Outcome& outcome, const hmpc::sec24::check::Totals& t) {
-    console << "result " << name << " final_y " ;
-    console.bits(outcome.final_state(0)).end_line();
-    console << "result " << name << " final_z ";
-    console.bits(outcome.final_state(1)).end_line();
+  template <class State>
+  void method(const char* name, const State& final_state, Scalar cost,
+              const hmpc::closed_loop_check::Totals& t) {
+    for (int i = 0; i < final_state.size(); ++i) {
+      console << "result " << name << " x" << i << " ";
+      console.bits(final_state(i)).end_line();
+    }
     console << "result " << name << " cost ";
-    console.bits(outcome.accumulated_cost).end_line();
-    console << "count " << name << " iterations " << static_cast<std::int64_t>(t.iterations)
-            << " unusable " << static_cast<std::int64_t>(t.unusable);
+    console.bits(cost).end_line();
+    console << "count " << name << " iterations " << t.iterations << " unusable " << t.unusable;
     console.end_line();
 
     std::uint64_t total = 0;
     for (std::uint32_t v : update_instructions) total += v;
     std::uint32_t* begin = update_instructions;
-    std::uint32_t* end = begin + hmpc::sec24::kSamples;
+    std::uint32_t* end = begin + kSamples;
     const std::uint32_t max = *std::max_element(begin, end);
-    std::nth_element(begin, begin + hmpc::sec24::kSamples / 2, end);
+    std::nth_element(begin, begin + kSamples / 2, end);
     console << "instructions " << name << " per_update max " << max << " median "
-            << begin[hmpc::sec24::kSamples / 2] << " mean "
-            << total / static_cast<std::uint64_t>(hmpc::sec24::kSamples);
+            << begin[kSamples / 2] << " mean " << total / static_cast<std::uint64_t>(kSamples);
     console.end_line();
-    ok = ok && std::isfinite(outcome.accumulated_cost) && t.unusable == 0 && t.iterations > 0;
+    std::fill(begin, end, 0u);
+    ok = ok && std::isfinite(cost) && t.unusable == 0 && t.iterations > 0;
   }
 };
 
@@ -94,7 +104,7 @@ int main() {
 
   TickObserver observer;
   Report report;
-  hmpc::sec24::check::run_all<Scalar>(observer, report);
+  hmpc::closed_loop_check::run_all<Scalar>(observer, report);
   console << "stack_high_water_bytes " << hmpc_stack_high_water();
   console.end_line();
   console << (report.ok ? "self-check ok" : "self-check FAILED");

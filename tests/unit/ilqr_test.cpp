@@ -58,9 +58,9 @@ class LqBase : public hmpc::ProblemBase<Self, double, kNx, kNu> {
   double running_cost(const Vx& x, const Vu& u, int) const {
     return 0.5 * x.dot(d_.Q * x) + 0.5 * u.dot(d_.R * u);
   }
-  double terminal_cost(const Vx& x) const { return 0.5 * x.dot(d_.Qf * x); }
-  Vu control_lower_bound() const { return d_.lower; }
-  Vu control_upper_bound() const { return d_.upper; }
+  double terminal_cost(const Vx& x, int) const { return 0.5 * x.dot(d_.Qf * x); }
+  Vu control_lower_bound(int) const { return d_.lower; }
+  Vu control_upper_bound(int) const { return d_.upper; }
 
  protected:
   const LqData& d_;
@@ -85,7 +85,7 @@ class AnalyticLq : public LqBase<AnalyticLq> {
     l.luu = d_.R;
     l.lux.setZero();
   }
-  void terminal_cost_derivatives(const Vx& x, TerminalDerivatives& l) const {
+  void terminal_cost_derivatives(const Vx& x, int, TerminalDerivatives& l) const {
     l.lx = d_.Qf * x;
     l.lxx = d_.Qf;
   }
@@ -218,9 +218,9 @@ class Pendulum : public hmpc::ProblemBase<Pendulum, double, 2, 1> {
   double running_cost(const State& x, const Control& u, int) const {
     return 0.01 * u.squaredNorm() + 0.001 * goal_error(x);
   }
-  double terminal_cost(const State& x) const { return 100.0 * goal_error(x); }
-  Control control_lower_bound() const { return Control(-torque_limit); }
-  Control control_upper_bound() const { return Control(torque_limit); }
+  double terminal_cost(const State& x, int) const { return 100.0 * goal_error(x); }
+  Control control_lower_bound(int) const { return Control(-torque_limit); }
+  Control control_upper_bound(int) const { return Control(torque_limit); }
 
  private:
   static double goal_error(const State& x) {
@@ -345,7 +345,7 @@ class Fragile : public hmpc::ProblemBase<Fragile, double, 1, 1> {
     return poisoned_cost ? std::numeric_limits<double>::quiet_NaN()
                          : (x(0) - 5.0) * (x(0) - 5.0) + 1e-4 * u.squaredNorm();
   }
-  double terminal_cost(const State& x) const { return 10 * (x(0) - 5.0) * (x(0) - 5.0); }
+  double terminal_cost(const State& x, int) const { return 10 * (x(0) - 5.0) * (x(0) - 5.0); }
 };
 
 TEST(IlqrBadInput, NonFiniteModelOutputNeverReachesThePlan) {

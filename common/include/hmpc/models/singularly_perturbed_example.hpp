@@ -100,7 +100,9 @@ class FullProblem : public ProblemBase<FullProblem<Scalar>, Scalar, 2, 2> {
   Scalar running_cost(const State& x, const Control& u, int) const {
     return regulator_cost(p_, x, u);
   }
-  Scalar terminal_cost(const State& x) const { return regulator_cost(p_, x, Control(Control::Zero())); }
+  Scalar terminal_cost(const State& x, int) const {
+    return regulator_cost(p_, x, Control(Control::Zero()));
+  }
 
   void running_cost_derivatives(const State& x, const Control& u, int,
                                 RunningDerivatives& d) const {
@@ -110,7 +112,7 @@ class FullProblem : public ProblemBase<FullProblem<Scalar>, Scalar, 2, 2> {
     d.luu = Scalar(2) * p_.r * Matrix2<Scalar>::Identity();
     d.lux.setZero();
   }
-  void terminal_cost_derivatives(const State& x, TerminalDerivatives& d) const {
+  void terminal_cost_derivatives(const State& x, int, TerminalDerivatives& d) const {
     d.lx = state_gradient(x);
     d.lxx = state_hessian();
   }
@@ -176,7 +178,7 @@ class SlowSubsystem : public ProblemBase<SlowSubsystem<Scalar>, Scalar, 1, 2> {
   Scalar running_cost(const State& y, const Control& u, int) const {
     return regulator_cost(p_, full_state(y, u), u);
   }
-  Scalar terminal_cost(const State& y) const {
+  Scalar terminal_cost(const State& y, int) const {
     return regulator_cost(p_, full_state(y, Control(Control::Zero())), Control(Control::Zero()));
   }
 
@@ -236,7 +238,7 @@ class FastSubsystem : public ProblemBase<FastSubsystem<Scalar, NFast>, Scalar, 1
   Scalar running_cost(const State& zeta, const Control& nu, int j) const {
     return regulator_cost(p_, full(zeta, j), nu);
   }
-  Scalar terminal_cost(const State& zeta) const {
+  Scalar terminal_cost(const State& zeta, int) const {
     return regulator_cost(p_, full(zeta, NFast), Control(Control::Zero()));
   }
   void running_cost_derivatives(const State& zeta, const Control& nu, int j,
@@ -247,7 +249,7 @@ class FastSubsystem : public ProblemBase<FastSubsystem<Scalar, NFast>, Scalar, 1
     d.luu = Scalar(2) * p_.r * Matrix2<Scalar>::Identity();
     d.lux.setZero();
   }
-  void terminal_cost_derivatives(const State& zeta, TerminalDerivatives& d) const {
+  void terminal_cost_derivatives(const State& zeta, int, TerminalDerivatives& d) const {
     d.lx(0) = Scalar(2) * p_.q_z * (zeta(0) + z_hat_[NFast] - p_.z_desired);
     d.lxx(0, 0) = Scalar(2) * p_.q_z;
   }

@@ -33,6 +33,7 @@ class RecedingHorizonMpc {
   const Solver& solver() const { return solver_; }
   const Result& last_result() const { return result_; }
   int last_iterations() const { return result_.iterations; }
+  LayerWork last_work() const { return {result_.work, SolveWork{}}; }
   bool last_plan_usable() const { return plan_is_usable(result_.status); }
 
   // Offline optimisation of the initial input sequence (Algorithm 1, line 1; Fig. 2.2).

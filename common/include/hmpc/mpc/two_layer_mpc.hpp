@@ -74,12 +74,14 @@ class TwoLayerMpc {
 
   UpperProblem& upper_problem() { return upper_problem_; }
   const UpperProblem& upper_problem() const { return upper_problem_; }
+  FastSubsystem& fast_subsystem() { return fast_problem_; }
   const FastSubsystem& fast_subsystem() const { return fast_problem_; }
   const UpperSolver& upper_solver() const { return upper_solver_; }
   const FastSolver& fast_solver() const { return fast_solver_; }
   const UpperResult& last_upper_result() const { return upper_result_; }
   const FastResult& last_fast_result() const { return fast_result_; }
   int last_iterations() const { return upper_result_.iterations + fast_result_.iterations; }
+  LayerWork last_work() const { return {upper_result_.work, fast_result_.work}; }
   bool last_plan_usable() const {
     return plan_is_usable(upper_result_.status) && plan_is_usable(fast_result_.status);
   }

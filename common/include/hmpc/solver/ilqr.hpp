@@ -73,6 +73,28 @@ struct IlqrConfig {
   Scalar min_reduction_ratio = Scalar(0);
 };
 
+// Work done by one solve, counted in model-step units. Deterministic for a given problem and
+// input, so a compute-time model for a target processor can be built on it (instructions
+// per unit measured once on the target, e.g. under QEMU).
+struct SolveWork {
+  std::int32_t rollout_steps = 0;     // dynamics + running cost evaluations
+  std::int32_t derivative_steps = 0;  // linearisations of dynamics and cost
+  std::int32_t backward_steps = 0;    // Riccati-like steps of the backward pass
+
+  SolveWork& operator+=(const SolveWork& o) {
+    rollout_steps += o.rollout_steps;
+    derivative_steps += o.derivative_steps;
+    backward_steps += o.backward_steps;
+    return *this;
+  }
+};
+
+// Work of one MPC update, by layer (a single-layer MPC has no fast layer).
+struct LayerWork {
+  SolveWork upper{};
+  SolveWork fast{};
+};
+
 template <typename Scalar>
 struct SolveResult {
   SolveStatus status = SolveStatus::kInvalidInput;
@@ -80,6 +102,7 @@ struct SolveResult {
   Scalar cost = Scalar(0);             // J of the returned plan
   Scalar initial_cost = Scalar(0);     // J of the warm-start rollout
   Scalar regularization = Scalar(0);   // mu after the solve
+  SolveWork work{};
 };
 
 // Default stop predicate: never stops early. A caller with a deadline passes a functor that
@@ -158,15 +181,20 @@ class Ilqr {
   Result solve(const Problem& problem, const State& x0, int iteration_budget,
                StopPredicate&& stop = StopPredicate{}) {
     Result result;
+    work_ = SolveWork{};
     if (!x0.allFinite()) {
       result.status = SolveStatus::kInvalidInput;
       result.cost = result.initial_cost = std::numeric_limits<Scalar>::quiet_NaN();
       return result;
     }
-    lower_ = problem.control_lower_bound();
-    upper_ = problem.control_upper_bound();
-    bounded_ = (lower_.array() > -std::numeric_limits<Scalar>::infinity()).any() ||
-               (upper_.array() < std::numeric_limits<Scalar>::infinity()).any();
+    bounded_ = false;
+    for (int t = 0; t < N; ++t) {
+      lower_[t] = problem.control_lower_bound(t);
+      upper_[t] = problem.control_upper_bound(t);
+      bounded_ = bounded_ ||
+                 (lower_[t].array() > -std::numeric_limits<Scalar>::infinity()).any() ||
+                 (upper_[t].array() < std::numeric_limits<Scalar>::infinity()).any();
+    }
 
     // Eqs. 2.18-2.20 with alpha = 0 and no feedback: roll the warm start out from x0.
     Scalar cost = rollout_open_loop(problem, x0);
@@ -177,6 +205,7 @@ class Ilqr {
     if (!std::isfinite(cost)) {
       result.status = SolveStatus::kNumericalFailure;
       result.cost = result.initial_cost = cost;
+      result.work = work_;
       return result;
     }
     commit_candidate(cost);
@@ -266,6 +295,7 @@ class Ilqr {
     }
     result.cost = cost_;
     result.regularization = mu_;
+    result.work = work_;
     return result;
   }
 
@@ -281,7 +311,9 @@ class Ilqr {
   using ControlJacobian = Eigen::Matrix<Scalar, kStateDim, kControlDim>;
   using ControlMatrix = Eigen::Matrix<Scalar, kControlDim, kControlDim>;
 
-  Control clamp(const Control& u) const { return u.cwiseMax(lower_).cwiseMin(upper_); }
+  Control clamp(const Control& u, int t) const {
+    return u.cwiseMax(lower_[t]).cwiseMin(upper_[t]);
+  }
 
   Scalar line_search_alpha(int i) const {
     if (config_.line_search_steps <= 1) return Scalar(1);
@@ -290,17 +322,18 @@ class Ilqr {
   }
 
   // Trajectory cost, Eq. 2.2; +inf if any state or cost term is not finite.
-  Scalar candidate_cost(const Problem& problem) const {
+  Scalar candidate_cost(const Problem& problem) {
+    work_.rollout_steps += N;
     Scalar cost = 0;
     for (int t = 0; t < N; ++t) cost += problem.running_cost(x_new_[t], u_new_[t], t);
-    cost += problem.terminal_cost(x_new_[N]);
+    cost += problem.terminal_cost(x_new_[N], N);
     return std::isfinite(cost) ? cost : std::numeric_limits<Scalar>::infinity();
   }
 
   Scalar rollout_open_loop(const Problem& problem, const State& x0) {
     x_new_[0] = x0;
     for (int t = 0; t < N; ++t) {
-      u_new_[t] = clamp(u_[t]);
+      u_new_[t] = clamp(u_[t], t);
       x_new_[t + 1] = problem.dynamics(x_new_[t], u_new_[t], t);
       if (!x_new_[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
     }
@@ -311,7 +344,7 @@ class Ilqr {
   Scalar rollout_closed_loop(const Problem& problem, const State& x0, Scalar alpha) {
     x_new_[0] = x0;
     for (int t = 0; t < N; ++t) {
-      u_new_[t] = clamp(u_[t] + alpha * k_[t] + K_[t] * (x_new_[t] - x_[t]));
+      u_new_[t] = clamp(u_[t] + alpha * k_[t] + K_[t] * (x_new_[t] - x_[t]), t);
       x_new_[t + 1] = problem.dynamics(x_new_[t], u_new_[t], t);
       if (!x_new_[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
     }
@@ -325,6 +358,7 @@ class Ilqr {
   }
 
   bool compute_derivatives(const Problem& problem) {
+    work_.derivative_steps += N;
     for (int t = 0; t < N; ++t) {
       problem.dynamics_derivatives(x_[t], u_[t], t, fx_[t], fu_[t]);
       problem.running_cost_derivatives(x_[t], u_[t], t, running_[t]);
@@ -333,7 +367,7 @@ class Ilqr {
           !running_[t].luu.allFinite() || !running_[t].lux.allFinite())
         return false;
     }
-    problem.terminal_cost_derivatives(x_[N], terminal_);
+    problem.terminal_cost_derivatives(x_[N], N, terminal_);
     return terminal_.lx.allFinite() && terminal_.lxx.allFinite();
   }
 
@@ -345,6 +379,7 @@ class Ilqr {
     State Vx = terminal_.lx;  // V_N = l_T (text after Eq. 2.16)
     StateJacobian Vxx = terminal_.lxx;
     for (int t = N - 1; t >= 0; --t) {
+      ++work_.backward_steps;
       const StateJacobian& A = fx_[t];
       const ControlJacobian& B = fu_[t];
       const RunningDerivatives& l = running_[t];
@@ -358,7 +393,7 @@ class Ilqr {
 
       if (bounded_) {
         // box-DDP: k from the box QP around the nominal control; K on the free set only.
-        solve_box_qp(Quu_reg, Qu, Control(lower_ - u_[t]), Control(upper_ - u_[t]), k_[t],
+        solve_box_qp(Quu_reg, Qu, Control(lower_[t] - u_[t]), Control(upper_[t] - u_[t]), k_[t],
                      box_, box_config_);
         if (!box_.usable()) return false;
         k_[t] = box_.x;
@@ -410,12 +445,13 @@ class Ilqr {
 
   Config config_;
   BoxQpConfig<Scalar> box_config_{};
-  Control lower_ = Control::Zero();
-  Control upper_ = Control::Zero();
+  std::array<Control, N> lower_{};  // box limits per step, read from the problem each solve
+  std::array<Control, N> upper_{};
   bool bounded_ = false;
   Scalar mu_ = 0;
   Scalar dmu_ = 1;
   Scalar cost_ = 0;
+  SolveWork work_{};
 
   StateTrajectory x_;       // nominal (best so far)
   ControlTrajectory u_;

@@ -4,10 +4,10 @@
 // hot path). It must define
 //   State  dynamics(const State& x, const Control& u, int t) const;      // Eq. 2.1
 //   Scalar running_cost(const State& x, const Control& u, int t) const;  // l(x, u), Eq. 2.2
-//   Scalar terminal_cost(const State& x) const;                          // l_T(x), Eq. 2.2
+//   Scalar terminal_cost(const State& x, int t) const;                   // l_T(x), Eq. 2.2
 // and may define, by hiding the defaults below,
 //   dynamics_derivatives, running_cost_derivatives, terminal_cost_derivatives (analytic),
-//   control_lower_bound, control_upper_bound (box limits; default: unbounded).
+//   control_lower_bound(t), control_upper_bound(t) (box limits at step t; default: none).
 // The defaults differentiate numerically, so a model supplies either analytic or
 // finite-difference derivatives simply by defining a function or not.
 #pragma once
@@ -78,16 +78,16 @@ class ProblemBase {
     d.lux = h.template bottomLeftCorner<Nu, Nx>();
   }
 
-  void terminal_cost_derivatives(const State& x, TerminalDerivatives& d) const {
+  void terminal_cost_derivatives(const State& x, int t, TerminalDerivatives& d) const {
     const Derived& self = derived();
-    central_difference_gradient_hessian([&](const State& xp) { return self.terminal_cost(xp); },
+    central_difference_gradient_hessian([&](const State& xp) { return self.terminal_cost(xp, t); },
                                         x, d.lx, d.lxx);
   }
 
-  Control control_lower_bound() const {
+  Control control_lower_bound(int) const {
     return Control::Constant(-std::numeric_limits<Scalar>::infinity());
   }
-  Control control_upper_bound() const {
+  Control control_upper_bound(int) const {
     return Control::Constant(std::numeric_limits<Scalar>::infinity());
   }
 

@@ -1,0 +1,203 @@
+// The forearm model of thesis Eq. 3.1, its problems (Eq. 3.3) and the fast subsystem of
+// Eq. 3.2: analytic derivatives against finite differences, and the reduction as stated.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <random>
+
+#include "hmpc/models/forearm_mpc.hpp"
+#include "hmpc/solver/finite_difference.hpp"
+
+namespace {
+
+using namespace hmpc::forearm;
+using V3 = Eigen::Vector3d;
+using V2 = Eigen::Vector2d;
+constexpr double kDeg = M_PI / 180.0;
+
+struct Fixture : ::testing::Test {
+  Parameters<double> p;
+  CostWeights<double> w;
+  TargetTrajectory<double> target;
+  std::mt19937 rng{7};
+  Fixture() { target.set_sinusoid(30 * kDeg, 0.5, 0.0, 0.0); }
+  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+  V3 random_state() { return V3(uniform(-60 * kDeg, 80 * kDeg), uniform(-4, 4), uniform(0.1, 5)); }
+  V2 random_input() { return V2(uniform(-5, 5), uniform(0, 5)); }
+};
+
+TEST_F(Fixture, PamTorquePartialsMatchFiniteDifferences) {
+  for (int i = 0; i < 50; ++i) {
+    const double P = uniform(0.1, 5), th = uniform(-1, 1.4), h = 1e-6;
+    const auto t = pam_torque(p, P, th);
+    EXPECT_NEAR(t.d_pressure, (pam_torque(p, P + h, th).tau - pam_torque(p, P - h, th).tau) / (2 * h), 1e-5);
+    EXPECT_NEAR(t.d_theta, (pam_torque(p, P, th + h).tau - pam_torque(p, P, th - h).tau) / (2 * h), 1e-5);
+    EXPECT_NEAR(t.d_theta_theta,
+                (pam_torque(p, P, th + h).d_theta - pam_torque(p, P, th - h).d_theta) / (2 * h), 1e-4);
+    EXPECT_NEAR(t.d_theta_pressure,
+                (pam_torque(p, P + h, th).d_theta - pam_torque(p, P - h, th).d_theta) / (2 * h), 1e-4);
+  }
+}
+
+TEST_F(Fixture, PamIsStrongAndSlowMotorWeakAndFast) {
+  // Strong: at full pressure the PAM lifts the arm with margin at every angle of the task.
+  for (double th : {-30 * kDeg, 0.0, 30 * kDeg}) {
+    const double gravity = p.mass * p.gravity * p.com_distance * std::cos(th);
+    EXPECT_GT(pam_torque(p, 5.0, th).tau, 2.5 * gravity);
+    EXPECT_GT(pam_torque(p, 5.0, th).tau, 10 * p.motor_gain * p.v_m_max);
+  }
+  // Slow: pressure time constant T_p / k_vp of 150 ms, far above the 4 ms control period.
+  EXPECT_NEAR(p.T_p / p.k_vp, 0.15, 1e-12);
+  // The equilibrium pressure holds the arm: zero acceleration at rest.
+  const double P = equilibrium_pressure(p, 0.2);
+  EXPECT_NEAR(joint_acceleration(p, 0.2, 0.0, P, 0.0).value, 0.0, 1e-9);
+  EXPECT_GT(P, 1.0);
+  EXPECT_LT(P, 2.5);
+}
+
+TEST_F(Fixture, FullProblemDynamicsJacobiansMatchFiniteDifferences) {
+  for (double step : {kFine4Step, kCoarse40Step}) {
+    ForearmProblem<double> problem(p, w, step, &target);
+    for (int i = 0; i < 50; ++i) {
+      const V3 x = random_state();
+      const V2 u = random_input();
+      Eigen::Matrix3d A, A_fd;
+      Eigen::Matrix<double, 3, 2> B, B_fd;
+      problem.dynamics_derivatives(x, u, 0, A, B);
+      hmpc::central_difference_jacobian([&](const V3& xp) { return problem.dynamics(xp, u, 0); }, x, A_fd);
+      hmpc::central_difference_jacobian([&](const V2& up) { return problem.dynamics(x, up, 0); }, u, B_fd);
+      EXPECT_LT((A - A_fd).norm(), 1e-7 * (1 + A.norm()));
+      EXPECT_LT((B - B_fd).norm(), 1e-7 * (1 + B.norm()));
+    }
+  }
+}
+
+TEST_F(Fixture, CostGradientsMatchFiniteDifferencesAndHessianIsPsd) {
+  ForearmProblem<double> problem(p, w, kCoarse20Step, &target);
+  problem.set_start_time(0.3);
+  for (int i = 0; i < 50; ++i) {
+    const V3 x = random_state();
+    const V2 u = random_input();
+    const int k = i % 10;
+    ForearmProblem<double>::RunningDerivatives d;
+    problem.running_cost_derivatives(x, u, k, d);
+    V3 gx;
+    V2 gu;
+    Eigen::Matrix3d hxx_unused;
+    Eigen::Matrix2d huu_unused;
+    hmpc::central_difference_gradient_hessian([&](const V3& xp) { return problem.running_cost(xp, u, k); }, x, gx, hxx_unused);
+    hmpc::central_difference_gradient_hessian([&](const V2& up) { return problem.running_cost(x, up, k); }, u, gu, huu_unused);
+    EXPECT_LT((d.lx - gx).norm(), 1e-4 * (1 + gx.norm()));
+    EXPECT_LT((d.lu - gu).norm(), 1e-4 * (1 + gu.norm()));
+    // Gauss-Newton Hessian of the torque term: positive semi-definite by construction.
+    Eigen::Matrix<double, 5, 5> H = Eigen::Matrix<double, 5, 5>::Zero();
+    H.topLeftCorner<3, 3>() = d.lxx;
+    H.bottomRightCorner<2, 2>() = d.luu;
+    using Solver = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 5, 5>>;
+    EXPECT_GE(Solver(H).eigenvalues().minCoeff(), -1e-9);
+    ForearmProblem<double>::TerminalDerivatives t;
+    problem.terminal_cost_derivatives(x, 10, t);
+    V3 gt;
+    hmpc::central_difference_gradient_hessian([&](const V3& xp) { return problem.terminal_cost(xp, 10); }, x, gt, hxx_unused);
+    EXPECT_LT((t.lx - gt).norm(), 1e-4 * (1 + gt.norm()));
+    EXPECT_LT((t.lxx - hxx_unused).norm(), 1e-2 * (1 + t.lxx.norm()));  // exact without torque
+  }
+}
+
+TEST_F(Fixture, SmoothMinPenalisesOnlyLowPressure) {
+  // Eq. 3.4: smin(a, 0) ~ min(a, 0) away from 0, smooth across it.
+  EXPECT_NEAR(smin_zero(2.0, w.gamma).value, 0.0, 2e-3);
+  EXPECT_NEAR(smin_zero(-2.0, w.gamma).value, -2.0, 2e-3);
+  EXPECT_NEAR(smin_zero(0.0, w.gamma).value, -w.gamma / 2, 1e-12);
+}
+
+using Fast = ForearmFastSubsystem<double, kTwoStageFineHorizon>;
+
+// Holds a coarse plan on the fine grid (Eq. 2.35) from a rollout of the full model.
+void hold_rollout_as_reference(const Parameters<double>& p, const CostWeights<double>& w,
+                               const TargetTrajectory<double>& target, Fast& fast, const V3& x0,
+                               const V2& u, std::vector<V3>* rollout) {
+  ForearmProblem<double> fine_full(p, w, kTwoStageFineStep, &target);
+  V3 x = x0;
+  for (int j = 0; j <= kTwoStageFineHorizon; ++j) {
+    fast.set_reference(j, x, u);
+    if (rollout) rollout->push_back(x);
+    x = fine_full.dynamics(x, u, j);
+  }
+}
+
+TEST_F(Fixture, FastSubsystemReducesAsEquation32States) {
+  Fast fast(p, w, kTwoStageFineStep, &target);
+  // At constant pressure (v_p = k_vp P: Eq. 3.2a holds exactly) the fast subsystem with nu = 0
+  // around the full model's own trajectory stays at zeta = 0: Eq. 3.2b is the joint row of
+  // Eq. 3.1 with P frozen.
+  const V3 x0(0.1, 0.5, 1.8);
+  const V2 u(1.0, p.k_vp * 1.8);
+  hold_rollout_as_reference(p, w, target, fast, x0, u, nullptr);
+  Fast::State zeta = fast.deviation(x0);
+  EXPECT_EQ(zeta.norm(), 0.0);
+  for (int j = 0; j < kTwoStageFineHorizon; ++j) {
+    zeta = fast.dynamics(zeta, Fast::Control::Zero(), j);
+    EXPECT_LT(zeta.norm(), 1e-12) << "step " << j;
+  }
+  // Only the motor acts on the fast states: the input Jacobian is the full model's v_m column.
+  ForearmProblem<double> full(p, w, kTwoStageFineStep, &target);
+  Eigen::Matrix3d A;
+  Eigen::Matrix<double, 3, 2> B;
+  full.dynamics_derivatives(x0, u, 0, A, B);
+  Fast::StateJacobian fx;
+  Fast::ControlJacobian fu;
+  fast.dynamics_derivatives(Fast::State::Zero(), Fast::Control::Zero(), 0, fx, fu);
+  EXPECT_LT((fu - B.topLeftCorner<2, 1>()).norm(), 1e-12);
+  EXPECT_LT((fx - A.topLeftCorner<2, 2>()).norm(), 1e-12);
+  // Composition (Eq. 2.36): nu refines v_m only; v_p is the coarse plan's.
+  const Fast::FullControl composed = fast.compose(u, Fast::Control(0.7));
+  EXPECT_DOUBLE_EQ(composed(0), u(0) + 0.7);
+  EXPECT_DOUBLE_EQ(composed(1), u(1));
+}
+
+TEST_F(Fixture, FastSubsystemDerivativesMatchFiniteDifferences) {
+  Fast fast(p, w, kTwoStageFineStep, &target);
+  hold_rollout_as_reference(p, w, target, fast, V3(0.2, -1.0, 2.2), V2(-2.0, 3.0), nullptr);
+  for (int i = 0; i < 30; ++i) {
+    const Fast::State zeta(uniform(-0.2, 0.2), uniform(-1, 1));
+    const Fast::Control nu(uniform(-3, 3));
+    const int j = i % kTwoStageFineHorizon;
+    Fast::StateJacobian fx, fx_fd;
+    Fast::ControlJacobian fu, fu_fd;
+    fast.dynamics_derivatives(zeta, nu, j, fx, fu);
+    hmpc::central_difference_jacobian([&](const Fast::State& z) { return fast.dynamics(z, nu, j); }, zeta, fx_fd);
+    hmpc::central_difference_jacobian([&](const Fast::Control& n) { return fast.dynamics(zeta, n, j); }, nu, fu_fd);
+    EXPECT_LT((fx - fx_fd).norm(), 1e-7);
+    EXPECT_LT((fu - fu_fd).norm(), 1e-7);
+    Fast::RunningDerivatives d;
+    fast.running_cost_derivatives(zeta, nu, j, d);
+    Eigen::Vector2d g;
+    Eigen::Matrix2d unused;
+    hmpc::central_difference_gradient_hessian([&](const Fast::State& z) { return fast.running_cost(z, nu, j); }, zeta, g, unused);
+    EXPECT_LT((d.lx - g).norm(), 1e-4 * (1 + g.norm()));
+  }
+  // The composed motor input stays in -5..5 V through the bounds on nu.
+  EXPECT_DOUBLE_EQ(fast.control_lower_bound(0)(0), -5.0 - (-2.0));
+  EXPECT_DOUBLE_EQ(fast.control_upper_bound(0)(0), 5.0 - (-2.0));
+}
+
+TEST(ForearmTarget, SinusoidAndSamples) {
+  TargetTrajectory<double> t;
+  t.set_sinusoid(0.5, 1.0, 0.1, 0.0);
+  EXPECT_NEAR(t.angle(0.25), 0.6, 1e-12);
+  EXPECT_TRUE(t.push_sample(1.0, 0.2));
+  EXPECT_TRUE(t.push_sample(2.0, 0.4));
+  EXPECT_FALSE(t.push_sample(2.0, 0.5)) << "times must increase";
+  EXPECT_FALSE(t.push_sample(3.0, std::nan(""))) << "non-finite samples are dropped";
+  EXPECT_NEAR(t.angle(1.5), 0.3, 1e-12);
+  EXPECT_NEAR(t.angle(0.0), 0.2, 1e-12) << "held before the first sample";
+  EXPECT_NEAR(t.angle(9.0), 0.4, 1e-12) << "held after the last sample";
+  for (int i = 0; i < 300; ++i) t.push_sample(3.0 + i, i);
+  EXPECT_EQ(t.sample_count(), TargetTrajectory<double>::kCapacity);
+  EXPECT_NEAR(t.angle(301.5), 298.5, 1e-9);
+}
+
+}  // namespace
