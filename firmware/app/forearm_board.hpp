@@ -1,0 +1,470 @@
+// The forearm actuator board's application (issue 3, DESIGN.md §3.2): state machine, host
+// watchdog, scheduler and CAN handlers around the two-stage MPC and the hold PID, independent
+// of the board it runs on. Board support (firmware/boards/*) feeds it received frames and
+// sensor readings, calls tick() at 1 kHz and run_mpc() when mpc_due(), applies outputs() and
+// transmits what pop_frame() yields.
+//
+//   boot --self-check--> idle --hold cmd--> hold (PID, load-velocity feedback) --run cmd--> run
+//   (MPC)   any --idle cmd--> idle;  run --hold cmd / repeated solver failures--> hold;
+//   any --heartbeat or sensor timeout, joint limit--> fault (safe outputs, latched) --idle cmd
+//   with clear_faults--> idle.
+//
+// Time is counted in 1 kHz ticks, so the same code runs paced by a timer (real time) or by
+// the plant's sensor frames (lock-step HIL) with identical behaviour. Only the solver
+// deadline reads a wall clock, and only when one is given.
+//
+// Nothing here allocates; the object holds every strategy's workspace (~60 kB for double):
+// give it static storage.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+
+#include "hmpc/control/load_velocity_feedback_pid.hpp"
+#include "hmpc/models/forearm_mpc.hpp"
+#include "hmpc/protocol/forearm_protocol.hpp"
+
+namespace hmpc::firmware {
+
+namespace proto = hmpc::forearm_protocol;
+
+// SolveTelemetry carries hmpc::SolveStatus values as they are.
+static_assert(int(proto::SolveStatusCode::kConverged) == int(SolveStatus::kConverged) &&
+              int(proto::SolveStatusCode::kIterationCap) == int(SolveStatus::kIterationCap) &&
+              int(proto::SolveStatusCode::kBudgetExhausted) == int(SolveStatus::kBudgetExhausted) &&
+              int(proto::SolveStatusCode::kStalled) == int(SolveStatus::kStalled) &&
+              int(proto::SolveStatusCode::kInvalidInput) == int(SolveStatus::kInvalidInput) &&
+              int(proto::SolveStatusCode::kNumericalFailure) == int(SolveStatus::kNumericalFailure),
+              "protocol solve status codes must match hmpc::SolveStatus");
+
+template <typename Scalar>
+struct BoardConfig {
+  proto::NodeId node = 0;
+  // The host sends ModeCommand every 10 ms (protocol); two missed periods trip the watchdog.
+  int heartbeat_timeout_ticks = 20;
+  // Sensors arrive every 1 ms; five missed readings are a sensor fault.
+  int sensor_timeout_ticks = 5;
+  // Consecutive failed or overrun MPC steps before falling back to hold.
+  int max_consecutive_bad_steps = 3;
+  // Deadline of one MPC step inside its 4 ms period (leaves time for I/O and telemetry).
+  double mpc_budget_s = 0.0035;
+  // Software joint limits (rad): beyond them the board faults into its safe state.
+  Scalar theta_min = Scalar(-1.2), theta_max = Scalar(1.6);
+  // Safe outputs (idle, fault): valve vented to atmosphere (0 V), motor off. The arm then
+  // rests on its mechanical stop; a board with a holding brake would hold instead.
+  Scalar safe_v_p = Scalar(0), safe_v_m = Scalar(0);
+  // Hold mode: position PID with load-velocity feedback on the valve, on top of the gravity
+  // feedforward k_vp P_eq(theta). Gains: ~2 V per 0.1 rad, damping from the load velocity.
+  typename LoadVelocityFeedbackPid<Scalar>::Config hold_pid = [] {
+    typename LoadVelocityFeedbackPid<Scalar>::Config c;
+    c.kp = Scalar(20);
+    c.ki = Scalar(10);
+    c.kd = Scalar(0.5);
+    c.derivative_time_constant = Scalar(0.01);
+    c.integral_limit = Scalar(2);
+    c.output_min = Scalar(-5);
+    c.output_max = Scalar(5);
+    c.load_velocity_gain = Scalar(0);
+    c.safe_output = Scalar(0);
+    return c;
+  }();
+  forearm::Parameters<Scalar> model{};
+  forearm::CostWeights<Scalar> weights{};
+};
+
+struct BoardCounters {
+  std::uint32_t watchdog_trips = 0;
+  std::uint32_t sensor_timeouts = 0;
+  std::uint32_t solver_failures = 0;   // unusable plans (previous plan used instead)
+  std::uint32_t overruns = 0;          // MPC steps that hit their deadline
+  std::uint32_t fallbacks = 0;         // run -> hold after repeated bad steps
+  std::uint32_t refused_commands = 0;  // valid frames asking for a transition not allowed now
+  std::uint32_t mpc_steps = 0;
+};
+
+template <typename Scalar>
+struct Outputs {
+  Scalar v_p = 0;  // V, PAM valve
+  Scalar v_m = 0;  // V, motor
+};
+
+template <typename Scalar>
+class ForearmBoard {
+ public:
+  using Config = BoardConfig<Scalar>;
+  using Strategies = forearm::Strategies<Scalar>;
+  using State = Eigen::Matrix<Scalar, 3, 1>;
+  using Control = Eigen::Matrix<Scalar, 2, 1>;
+  using Pid = LoadVelocityFeedbackPid<Scalar>;
+  // Seconds from an arbitrary origin, for the solver deadline; nullptr: no deadline (HIL
+  // lock-step, where the simulator charges compute time itself).
+  using WallClock = double (*)();
+
+  static constexpr int kTicksPerMpcStep = 4;  // 1 kHz I/O, 4 ms MPC (Sec. 3.3)
+  static constexpr Scalar kTick = Scalar(0.001);
+
+  // The strategies point at target_: the board must stay where it was built.
+  ForearmBoard(const ForearmBoard&) = delete;
+  ForearmBoard& operator=(const ForearmBoard&) = delete;
+
+  explicit ForearmBoard(const Config& config, WallClock clock = nullptr)
+      : config_(config), clock_(clock), receiver_(config.node), sender_(config.node),
+        fine4_(Strategies::fine4(setup())), fine8_(Strategies::fine8(setup())),
+        coarse20_(Strategies::coarse20(setup())), coarse40_(Strategies::coarse40(setup())),
+        two_stage_(Strategies::two_stage(setup())), pam_only_(Strategies::pam_only(setup())) {
+    target_.set_constant(Scalar(0));
+  }
+
+  // ---- inputs ------------------------------------------------------------------------
+
+  // Any frame from the bus. Frames for other nodes are ignored; ours are validated (id,
+  // length, checksum, counter, range) and counted when rejected, never acted on.
+  void on_frame(const proto::Frame& frame) {
+    proto::FrameType type;
+    proto::NodeId node;
+    if (!proto::identify(frame.id, type, node) || node != config_.node) return;
+    switch (type) {
+      case proto::FrameType::kModeCommand: {
+        proto::ModeCommand m;
+        if (receiver_.decode(frame, m) == proto::DecodeResult::kOk) on_mode_command(m);
+        break;
+      }
+      case proto::FrameType::kSensor: {
+        proto::SensorSample s;
+        if (receiver_.decode(frame, s) == proto::DecodeResult::kOk)
+          on_measurement(s.theta, s.theta_dot, s.pressure);
+        break;
+      }
+      case proto::FrameType::kTrajectorySample: {
+        proto::TrajectorySample s;
+        if (receiver_.decode(frame, s) == proto::DecodeResult::kOk) on_trajectory_sample(s);
+        break;
+      }
+      case proto::FrameType::kGains: {
+        proto::Gains g;
+        if (receiver_.decode(frame, g) == proto::DecodeResult::kOk) on_gains(g);
+        break;
+      }
+      default:  // frames this board sends, not receives
+        break;
+    }
+  }
+
+  // A sensor reading (from the bus in HIL, from the board's own ADC/encoder on hardware).
+  // Pressure in MPa as on the bus; the model works in bar.
+  void on_measurement(float theta, float theta_dot, float pressure_mpa) {
+    if (!std::isfinite(theta) || !std::isfinite(theta_dot) || !std::isfinite(pressure_mpa))
+      return;  // never acted on; the sensor watchdog notices the silence
+    x_ << Scalar(theta), Scalar(theta_dot), Scalar(10) * Scalar(pressure_mpa);
+    last_sensor_tick_ = ticks_;
+    have_sensor_ = true;
+  }
+
+  // ---- scheduling --------------------------------------------------------------------
+
+  // The 1 kHz step: watchdogs, mode logic, the hold controller, outputs and telemetry.
+  void tick() {
+    ++ticks_;
+    if (mode_ == proto::BoardMode::kBoot) mode_ = proto::BoardMode::kIdle;  // self-check: config
+    check_watchdogs();
+    switch (mode_) {
+      case proto::BoardMode::kHold: hold_step(); break;
+      case proto::BoardMode::kRun: apply_plan(); break;
+      default: outputs_ = {config_.safe_v_p, config_.safe_v_m}; break;
+    }
+    mpc_due_ = mode_ == proto::BoardMode::kRun && ticks_ % kTicksPerMpcStep == 0;
+    send_telemetry();
+  }
+
+  bool mpc_due() const { return mpc_due_; }
+
+  // The 4 ms MPC step (Table 3.1 strategy selected by the host). Runs the solver against the
+  // deadline, keeps the previous plan (time-shifted by the MPC) on a failed or overrun step,
+  // and falls back to hold after repeated bad steps.
+  void run_mpc() {
+    mpc_due_ = false;
+    if (mode_ != proto::BoardMode::kRun) return;
+    const double start = clock_ ? clock_() : 0.0;
+    const double deadline = start + config_.mpc_budget_s;
+    const auto stop = [this, deadline] { return clock_ && clock_() > deadline; };
+    SolveStatus status = SolveStatus::kConverged;
+    with_strategy([&](auto& mpc) {
+      forearm::set_time(mpc, host_time());
+      plan_ = mpc.update(x_, stop);
+      usable_ = mpc.last_plan_usable();
+      record_layers(mpc, status);
+    });
+    const double elapsed = clock_ ? clock_() - start : 0.0;
+    ++counters_.mpc_steps;
+    const bool overrun = clock_ && elapsed > config_.mpc_budget_s;
+    counters_.solver_failures += usable_ ? 0 : 1;
+    counters_.overruns += overrun ? 1 : 0;
+    consecutive_bad_steps_ = (!usable_ || overrun) ? consecutive_bad_steps_ + 1 : 0;
+    telemetry_.status = static_cast<proto::SolveStatusCode>(status);
+    telemetry_.solve_time_us = static_cast<std::uint16_t>(
+        elapsed * 1e6 < 65535.0 ? elapsed * 1e6 : 65535.0);
+    if (consecutive_bad_steps_ >= config_.max_consecutive_bad_steps) {
+      ++counters_.fallbacks;
+      faults_ |= proto::fault::kSolverFallback;
+      enter_hold();
+    }
+  }
+
+  // ---- outputs -----------------------------------------------------------------------
+
+  const Outputs<Scalar>& outputs() const { return outputs_; }
+  bool pop_frame(proto::Frame& out) {
+    if (outbox_count_ == 0) return false;
+    out = outbox_[outbox_head_];
+    outbox_head_ = (outbox_head_ + 1) % kOutboxSize;
+    --outbox_count_;
+    return true;
+  }
+
+  proto::BoardMode mode() const { return mode_; }
+  std::uint8_t faults() const { return faults_; }
+  proto::Strategy strategy() const { return strategy_; }
+  const BoardCounters& counters() const { return counters_; }
+  const proto::RejectCounters& rejects() const { return receiver_.rejects; }
+  std::uint32_t ticks() const { return ticks_; }
+  std::uint32_t dropped_frames() const { return dropped_frames_; }
+
+ private:
+  static constexpr int kOutboxSize = 16;
+
+  typename Strategies::Setup setup() const {
+    typename Strategies::Setup s;
+    s.parameters = config_.model;
+    s.weights = config_.weights;
+    s.target = &target_;
+    return s;
+  }
+
+  template <class F>
+  void with_strategy(F&& f) {
+    switch (strategy_) {
+      case proto::Strategy::kFine4ms: f(fine4_); break;
+      case proto::Strategy::kFine8ms: f(fine8_); break;
+      case proto::Strategy::kCoarse20ms: f(coarse20_); break;
+      case proto::Strategy::kCoarse40ms: f(coarse40_); break;
+      case proto::Strategy::kTwoStage: f(two_stage_); break;
+      case proto::Strategy::kPamOnly: f(pam_only_); break;
+    }
+  }
+  // Iterations per stage and the status the telemetry reports: the fast stage's unless the
+  // coarse stage's plan was unusable.
+  template <class Mpc>
+  void record_layers(const Mpc& mpc, SolveStatus& status) {
+    if constexpr (std::is_same_v<Mpc, typename Strategies::TwoStage>) {
+      const auto& upper = mpc.last_upper_result();
+      const auto& fast = mpc.last_fast_result();
+      telemetry_.coarse_iterations = saturate_u8(upper.iterations);
+      telemetry_.fine_iterations = saturate_u8(fast.iterations);
+      status = plan_is_usable(upper.status) ? fast.status : upper.status;
+    } else {
+      telemetry_.coarse_iterations = saturate_u8(mpc.last_result().iterations);
+      telemetry_.fine_iterations = 0;
+      status = mpc.last_result().status;
+    }
+  }
+  static std::uint8_t saturate_u8(int v) {
+    return static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+  }
+
+  bool sensor_fresh() const {
+    return have_sensor_ && ticks_ - last_sensor_tick_ <= std::uint32_t(config_.sensor_timeout_ticks);
+  }
+
+  // The host's trajectory clock now, extrapolated from the last heartbeat by board ticks.
+  Scalar host_time() const {
+    return Scalar(last_host_time_us_) * Scalar(1e-6) + Scalar(ticks_ - last_heartbeat_tick_) * kTick;
+  }
+
+  void on_mode_command(const proto::ModeCommand& m) {
+    last_heartbeat_tick_ = ticks_;
+    last_host_time_us_ = m.host_time_us;
+    heartbeat_seen_ = true;
+    if (mode_ == proto::BoardMode::kFault) {
+      if (m.mode == proto::RequestedMode::kIdle && m.clear_faults && sensor_fresh()) {
+        faults_ = 0;
+        mode_ = proto::BoardMode::kIdle;
+      } else if (m.mode != proto::RequestedMode::kIdle) {
+        ++counters_.refused_commands;
+      }
+      return;
+    }
+    switch (m.mode) {
+      case proto::RequestedMode::kIdle:
+        if (m.clear_faults) faults_ = 0;
+        mode_ = proto::BoardMode::kIdle;
+        break;
+      case proto::RequestedMode::kHold:
+        if (mode_ == proto::BoardMode::kHold) break;
+        if (!sensor_fresh()) {
+          ++counters_.refused_commands;
+          break;
+        }
+        enter_hold();
+        break;
+      case proto::RequestedMode::kRun:
+        if (!sensor_fresh()) {
+          ++counters_.refused_commands;
+          break;
+        }
+        if (mode_ != proto::BoardMode::kRun || m.strategy != strategy_) enter_run(m.strategy);
+        break;
+    }
+  }
+
+  void on_trajectory_sample(const proto::TrajectorySample& s) {
+    target_.push_sample(Scalar(s.time_us) * Scalar(1e-6), Scalar(s.theta_d));
+  }
+
+  void on_gains(const proto::Gains& g) {
+    auto c = config_.hold_pid;
+    c.kp = Scalar(g.kp);
+    c.ki = Scalar(g.ki);
+    c.kd = Scalar(g.kd);
+    c.load_velocity_gain = Scalar(g.k_lv);
+    if (Pid::config_valid(c)) config_.hold_pid = c;
+  }
+
+  void enter_hold() {
+    hold_angle_ = x_(0);
+    Pid::reset(pid_state_);
+    mode_ = proto::BoardMode::kHold;
+  }
+
+  void enter_run(proto::Strategy strategy) {
+    strategy_ = strategy;
+    consecutive_bad_steps_ = 0;
+    if (target_.sample_count() == 0) target_.set_constant(x_(0));  // hold where it is
+    // Algorithm 1, line 1: initial inputs optimised before the first step (a one-off cost:
+    // the hold outputs stay applied meanwhile).
+    with_strategy([&](auto& mpc) {
+      forearm::set_time(mpc, host_time());
+      mpc.initialize(x_, forearm::kIterationCap);
+    });
+    plan_ = Control(Scalar(0), config_.model.k_vp * x_(2));
+    mode_ = proto::BoardMode::kRun;
+  }
+
+  void fault(std::uint8_t bit) {
+    faults_ |= bit;
+    mode_ = proto::BoardMode::kFault;
+    outputs_ = {config_.safe_v_p, config_.safe_v_m};
+  }
+
+  void check_watchdogs() {
+    const bool active = mode_ == proto::BoardMode::kHold || mode_ == proto::BoardMode::kRun;
+    if (active && ticks_ - last_heartbeat_tick_ > std::uint32_t(config_.heartbeat_timeout_ticks)) {
+      ++counters_.watchdog_trips;
+      receiver_.counters.reset(proto::FrameType::kModeCommand);
+      fault(proto::fault::kHeartbeatTimeout);
+    }
+    if (active && !sensor_fresh()) {
+      ++counters_.sensor_timeouts;
+      receiver_.counters.reset(proto::FrameType::kSensor);
+      fault(proto::fault::kSensorTimeout);
+    }
+    if (have_sensor_ && (x_(0) < config_.theta_min || x_(0) > config_.theta_max) &&
+        mode_ != proto::BoardMode::kFault && mode_ != proto::BoardMode::kIdle)
+      fault(proto::fault::kJointLimit);
+  }
+
+  // Hold: PID on theta with load-velocity feedback, around the gravity feedforward.
+  void hold_step() {
+    const auto& p = config_.model;
+    const Scalar feedforward = p.k_vp * forearm::equilibrium_pressure(p, hold_angle_);
+    const Scalar correction =
+        Pid::update(config_.hold_pid, pid_state_, hold_angle_, x_(0), x_(1), kTick);
+    outputs_ = {clamp(feedforward + correction, p.v_p_min, p.v_p_max), Scalar(0)};
+  }
+
+  void apply_plan() {
+    const auto& p = config_.model;
+    outputs_ = {clamp(plan_(1), p.v_p_min, p.v_p_max), clamp(plan_(0), p.v_m_min, p.v_m_max)};
+  }
+
+  static Scalar clamp(Scalar v, Scalar lo, Scalar hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+  template <class Message>
+  void send(const Message& m) {
+    proto::Frame f;
+    if (sender_.encode(m, f) != proto::EncodeResult::kOk) return;
+    if (outbox_count_ == kOutboxSize) {  // the bus is not draining: drop the oldest
+      outbox_head_ = (outbox_head_ + 1) % kOutboxSize;
+      --outbox_count_;
+      ++dropped_frames_;
+    }
+    outbox_[(outbox_head_ + outbox_count_) % kOutboxSize] = f;
+    ++outbox_count_;
+  }
+
+  void send_telemetry() {
+    // To the actuators (the plant, in HIL) every tick.
+    send(proto::ActuatorCommand{float(outputs_.v_p), float(outputs_.v_m), 0});
+    if (ticks_ % kTicksPerMpcStep == 0) {
+      const auto& p = config_.model;
+      send(proto::JointState{float(x_(0)), float(x_(1)), float(x_(2) / Scalar(10)), 0});
+      const Scalar tau_p = forearm::pam_torque(p, x_(2), x_(0)).tau;
+      send(proto::ActuatorOutputs{float(outputs_.v_p), float(outputs_.v_m),
+                                  float(clamp(tau_p, Scalar(-30), Scalar(30))),
+                                  float(p.motor_gain * outputs_.v_m), 0});
+      telemetry_.tracking_error = float(clamp(target_.angle(host_time()) - x_(0), Scalar(-6.28),
+                                              Scalar(6.28)));
+      if (mode_ != proto::BoardMode::kRun) telemetry_.status = proto::SolveStatusCode::kNoSolve;
+      send(telemetry_);
+    }
+    if (ticks_ % 10 == 0) {
+      proto::BoardStatus s;
+      s.mode = mode_;
+      s.faults = faults_;
+      s.strategy = strategy_;
+      s.rejected_frames = std::uint8_t(receiver_.rejects.total());
+      s.watchdog_trips = std::uint8_t(counters_.watchdog_trips);
+      s.solver_failures = std::uint8_t(counters_.solver_failures);
+      s.overruns = std::uint8_t(counters_.overruns);
+      send(s);
+    }
+  }
+
+  Config config_;
+  WallClock clock_;
+  proto::Receiver receiver_;
+  proto::Sender sender_;
+  forearm::TargetTrajectory<Scalar> target_;
+  typename Strategies::Fine4 fine4_;
+  typename Strategies::Fine8 fine8_;
+  typename Strategies::Coarse20 coarse20_;
+  typename Strategies::Coarse40 coarse40_;
+  typename Strategies::TwoStage two_stage_;
+  typename Strategies::PamOnly pam_only_;
+
+  proto::BoardMode mode_ = proto::BoardMode::kBoot;
+  proto::Strategy strategy_ = proto::Strategy::kTwoStage;
+  std::uint8_t faults_ = 0;
+  BoardCounters counters_{};
+  State x_ = State::Zero();
+  bool have_sensor_ = false;
+  bool heartbeat_seen_ = false;
+  std::uint32_t ticks_ = 0;
+  std::uint32_t last_sensor_tick_ = 0;
+  std::uint32_t last_heartbeat_tick_ = 0;
+  std::uint32_t last_host_time_us_ = 0;
+  Scalar hold_angle_ = 0;
+  typename Pid::State pid_state_{};
+  Control plan_ = Control::Zero();
+  bool usable_ = true;
+  bool mpc_due_ = false;
+  int consecutive_bad_steps_ = 0;
+  proto::SolveTelemetry telemetry_{};
+  Outputs<Scalar> outputs_{};
+  proto::Frame outbox_[kOutboxSize]{};
+  int outbox_head_ = 0;
+  int outbox_count_ = 0;
+  std::uint32_t dropped_frames_ = 0;
+};
+
+}  // namespace hmpc::firmware
