@@ -18,8 +18,9 @@ packages=(
   # plots of the demo and scenarios
   gnuplot-nox
   # vcan launcher (hil/vcan): a guest booting Debian's stock kernel when the host kernel has
-  # no CAN; kernel payload and modules may be xz- or zstd-compressed
-  qemu-system-x86 busybox-static iproute2 xz-utils zstd
+  # no CAN; kmod resolves the guest's module dependencies, and the kernel and its modules may
+  # be xz- or zstd-compressed
+  qemu-system-x86 busybox-static iproute2 kmod xz-utils zstd
   # CAN inspection tools (candump, cansend, cangen) for debugging on vcan or a real bus
   can-utils
 )
