@@ -32,7 +32,12 @@ for p in "${packages[@]}"; do
   fi
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
+# The vcan launcher downloads (never installs) Debian's kernel package on first use, which
+# needs package lists even when every package above is installed.
+need_lists=0
+apt-cache show linux-image-amd64 >/dev/null 2>&1 || need_lists=1
+
+if [ ${#missing[@]} -eq 0 ] && [ $need_lists -eq 0 ]; then
   echo "setup-debian: all ${#packages[@]} packages present"
   exit 0
 fi
@@ -46,7 +51,9 @@ else
   exit 1
 fi
 
-echo "setup-debian: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 "${as_root[@]}" apt-get update -qq
-"${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup-debian: installing ${missing[*]}"
+  "${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
