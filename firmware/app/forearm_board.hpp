@@ -193,6 +193,8 @@ class ForearmBoard {
       forearm::set_time(mpc, host_time());
       plan_ = mpc.update(x_, stop);
       usable_ = mpc.last_plan_usable();
+      last_work_ = mpc.last_work();
+      last_iterations_ = mpc.last_iterations();
       record_layers(mpc, status);
     });
     const double elapsed = clock_ ? clock_() - start : 0.0;
@@ -229,6 +231,10 @@ class ForearmBoard {
   const proto::RejectCounters& rejects() const { return receiver_.rejects; }
   std::uint32_t ticks() const { return ticks_; }
   std::uint32_t dropped_frames() const { return dropped_frames_; }
+  // The last MPC step, as an MPC reports it (for telemetry and compute accounting).
+  int last_iterations() const { return last_iterations_; }
+  bool last_plan_usable() const { return usable_; }
+  LayerWork last_work() const { return last_work_; }
 
  private:
   static constexpr int kOutboxSize = 16;
@@ -457,6 +463,8 @@ class ForearmBoard {
   typename Pid::State pid_state_{};
   Control plan_ = Control::Zero();
   bool usable_ = true;
+  int last_iterations_ = 0;
+  LayerWork last_work_{};
   bool mpc_due_ = false;
   int consecutive_bad_steps_ = 0;
   proto::SolveTelemetry telemetry_{};
