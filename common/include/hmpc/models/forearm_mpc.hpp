@@ -49,10 +49,7 @@ inline const char* to_string(Strategy s) {
 
 template <typename Scalar>
 IlqrConfig<Scalar> solver_config() {
-  IlqrConfig<Scalar> c;
-  c.max_iterations = kIterationCap;
-  c.tolerance = Scalar(kTolerance);
-  return c;
+  return IlqrConfig<Scalar>::with_cap_and_tolerance(kIterationCap, kTolerance);
 }
 
 template <typename Scalar>

@@ -38,10 +38,7 @@ Vector2<Scalar> initial_state() {
 
 template <typename Scalar>
 IlqrConfig<Scalar> solver_config() {
-  IlqrConfig<Scalar> config;
-  config.max_iterations = kIterationCap;
-  config.tolerance = Scalar(kTolerance);
-  return config;
+  return IlqrConfig<Scalar>::with_cap_and_tolerance(kIterationCap, kTolerance);
 }
 
 template <typename Scalar>

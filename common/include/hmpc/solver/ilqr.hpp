@@ -71,6 +71,14 @@ struct IlqrConfig {
   // expected reduction exceeds min_reduction_ratio.
   int line_search_steps = 11;
   Scalar min_reduction_ratio = Scalar(0);
+
+  // The two settings a thesis experiment states: iteration cap and termination criterion.
+  static IlqrConfig with_cap_and_tolerance(int cap, double tol) {
+    IlqrConfig c;
+    c.max_iterations = cap;
+    c.tolerance = Scalar(tol);
+    return c;
+  }
 };
 
 // Work done by one solve, counted in model-step units. Deterministic for a given problem and
