@@ -1,0 +1,79 @@
+// The linker sends this program's calls to malloc & co. to the __wrap_ functions below (see
+// CMakeLists.txt). Calls made inside shared libraries bypass --wrap, libstdc++'s operator new
+// among them, so operator new is replaced here to allocate through the wrapped malloc.
+#include "heap_monitor.hpp"
+
+#include <atomic>
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+
+namespace {
+std::atomic<bool> g_armed{false};
+std::atomic<std::uint64_t> g_allocations{0};
+
+void note_allocation() {
+  if (g_armed.load(std::memory_order_relaxed)) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+}  // namespace
+
+namespace hmpc::linux_board::heap_monitor {
+void arm() { g_armed.store(true); }
+void disarm() { g_armed.store(false); }
+std::uint64_t allocations() { return g_allocations.load(); }
+}  // namespace hmpc::linux_board::heap_monitor
+
+extern "C" {
+void* __real_malloc(std::size_t);
+void* __real_calloc(std::size_t, std::size_t);
+void* __real_realloc(void*, std::size_t);
+void* __real_aligned_alloc(std::size_t, std::size_t);
+int __real_posix_memalign(void**, std::size_t, std::size_t);
+
+void* __wrap_malloc(std::size_t size) {
+  note_allocation();
+  return __real_malloc(size);
+}
+void* __wrap_calloc(std::size_t count, std::size_t size) {
+  note_allocation();
+  return __real_calloc(count, size);
+}
+void* __wrap_realloc(void* pointer, std::size_t size) {
+  note_allocation();
+  return __real_realloc(pointer, size);
+}
+void* __wrap_aligned_alloc(std::size_t alignment, std::size_t size) {
+  note_allocation();
+  return __real_aligned_alloc(alignment, size);
+}
+int __wrap_posix_memalign(void** pointer, std::size_t alignment, std::size_t size) {
+  note_allocation();
+  return __real_posix_memalign(pointer, alignment, size);
+}
+}
+
+void* operator new(std::size_t size) {
+  if (void* p = std::malloc(size != 0 ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, std::align_val_t alignment) {
+  const std::size_t a = static_cast<std::size_t>(alignment);
+  // aligned_alloc wants a size that is a multiple of the alignment.
+  const std::size_t rounded = (size + a - 1) / a * a;
+  if (void* p = std::aligned_alloc(a, rounded != 0 ? rounded : a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t alignment) {
+  return operator new(size, alignment);
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }

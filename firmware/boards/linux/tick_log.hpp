@@ -1,0 +1,99 @@
+// The --log CSV: one row per tick, kept in memory that is allocated and touched before the
+// control loop (so recording neither allocates nor page-faults) and written out at exit. When
+// the run is longer than the buffer, the oldest rows give way: the end of a run, where a fault
+// would be, is what is kept.
+#pragma once
+
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "hmpc/protocol/forearm_protocol.hpp"
+
+namespace hmpc::linux_board {
+
+// The DBC's name of an enumerated signal value (BoardMode, Strategy, ...), or "?".
+template <std::size_t N>
+const char* value_name(const forearm_protocol::EnumValue (&values)[N], std::uint32_t value) {
+  for (const auto& v : values)
+    if (v.value == value) return v.name;
+  return "?";
+}
+
+class TickLog {
+ public:
+  struct Row {
+    std::uint32_t tick;
+    float wall_time_s;  // since the control loop started
+    forearm_protocol::BoardMode mode;
+    std::uint8_t faults;
+    forearm_protocol::Strategy strategy;
+    float v_p, v_m;  // V, the outputs applied this tick
+  };
+
+  TickLog() = default;
+  TickLog(const TickLog&) = delete;
+  TickLog& operator=(const TickLog&) = delete;
+  ~TickLog() {
+    if (file_ != nullptr) std::fclose(file_);
+  }
+
+  // Creates the file now, so a bad path fails before the board starts.
+  bool open(const std::string& path, std::size_t capacity, std::string& error) {
+    file_ = std::fopen(path.c_str(), "w");
+    if (file_ == nullptr) {
+      error = "cannot create log file '" + path + "': " + std::strerror(errno);
+      return false;
+    }
+    path_ = path;
+    rows_.assign(capacity, Row{});
+    return true;
+  }
+
+  bool is_open() const { return file_ != nullptr; }
+
+  void record(const Row& row) {
+    if (rows_.empty()) return;
+    rows_[recorded_ % rows_.size()] = row;
+    ++recorded_;
+  }
+
+  std::uint64_t dropped_rows() const {
+    return recorded_ > rows_.size() ? recorded_ - rows_.size() : 0;
+  }
+
+  // Writes the kept rows, oldest first, and closes the file. Modes and strategies by their
+  // DBC names, so the CSV reads like a decoded bus trace.
+  bool write_csv(std::string& error) {
+    if (file_ == nullptr) return true;
+    std::fprintf(file_, "tick,wall_time_s,mode,faults,strategy,v_p,v_m\n");
+    const std::uint64_t first = dropped_rows();
+    for (std::uint64_t i = first; i < recorded_; ++i) {
+      const Row& r = rows_[i % rows_.size()];
+      std::fprintf(file_, "%u,%.6f,%s,%u,%s,%.4f,%.4f\n", r.tick, double(r.wall_time_s),
+                   value_name(forearm_protocol::kBoardModeValues, std::uint32_t(r.mode)),
+                   unsigned(r.faults),
+                   value_name(forearm_protocol::kStrategyValues, std::uint32_t(r.strategy)),
+                   double(r.v_p), double(r.v_m));
+    }
+    const bool written = std::ferror(file_) == 0;
+    const bool closed = std::fclose(file_) == 0;
+    file_ = nullptr;
+    if (!written || !closed) {
+      error = "writing log file '" + path_ + "' failed";
+      return false;
+    }
+    return true;
+  }
+
+ private:
+  std::FILE* file_ = nullptr;
+  std::string path_;
+  std::vector<Row> rows_;
+  std::uint64_t recorded_ = 0;
+};
+
+}  // namespace hmpc::linux_board
