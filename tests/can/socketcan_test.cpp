@@ -3,6 +3,8 @@
 // and round-trip latency through the kernel's CAN stack.
 #include "hmpc/platform/linux/socketcan.hpp"
 
+#include "hmpc/platform/linux/heap_monitor.hpp"
+
 #include <fcntl.h>
 #include <gtest/gtest.h>
 
@@ -18,35 +20,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-// Heap entry points are counted while g_counting is set: send/receive must not allocate.
-namespace {
-std::atomic<long> g_allocations{0};
-std::atomic<bool> g_counting{false};
-void count_allocation() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
-}
-}  // namespace
-
-extern "C" {
-void* __real_malloc(std::size_t);
-void* __real_calloc(std::size_t, std::size_t);
-void* __real_realloc(void*, std::size_t);
-void* __wrap_malloc(std::size_t n) { count_allocation(); return __real_malloc(n); }
-void* __wrap_calloc(std::size_t a, std::size_t b) { count_allocation(); return __real_calloc(a, b); }
-void* __wrap_realloc(void* p, std::size_t n) { count_allocation(); return __real_realloc(p, n); }
-}
-
-void* operator new(std::size_t n) {
-  count_allocation();
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -178,24 +151,25 @@ TEST_F(SocketCanOnVcan, MovedSocketKeepsWorkingAndSourceIsClosed) {
 }
 
 TEST_F(SocketCanOnVcan, SendAndReceiveDoNotAllocate) {
+  namespace heap_monitor = hmpc::platform::heap_monitor;
   CanFrame frame{};
-  g_allocations = 0;
-  g_counting = true;
+  const auto before = heap_monitor::allocations();
+  heap_monitor::arm();
   for (int i = 0; i < 200; ++i) {
     if (!sender_.send(make_frame(0x300, 8, static_cast<std::uint8_t>(i))).ok()) break;
     if (!receiver_.receive(frame, kArrival).ok()) break;
   }
   receiver_.receive(frame, 1ms);  // the timeout path too
-  g_counting = false;
+  heap_monitor::disarm();
   EXPECT_EQ(frame.data[0], make_frame(0x300, 8, 199).data[0]);
-  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(heap_monitor::allocations(), before);
 
   // Positive control: the counter sees an allocation (operator new, and the malloc under it).
-  g_counting = true;
+  heap_monitor::arm();
   int* volatile allocated = new int(1);  // volatile: the compiler may not elide the pair
-  g_counting = false;
+  heap_monitor::disarm();
   delete allocated;
-  EXPECT_GT(g_allocations.load(), 0);
+  EXPECT_GT(heap_monitor::allocations(), before);
 }
 
 TEST(SocketCanOpen, NamesTheProblem) {

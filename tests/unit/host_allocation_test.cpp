@@ -1,85 +1,46 @@
 // Host control loops do not allocate: every heap entry point reachable from our code is
-// counted (operator new replaced, malloc family wrapped at link time) while the four
-// Sec. 2.4 MPCs run closed loop. A positive control proves the counter sees allocations.
+// counted (hmpc::heap_monitor: operator new replaced, malloc family wrapped at link time)
+// while the four Sec. 2.4 MPCs run closed loop. A positive control proves the counter sees
+// allocations.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cstdlib>
 #include <memory>
 #include <new>
 #include <vector>
 
 #include "hmpc/models/singularly_perturbed_example_mpc.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-std::atomic<bool> g_counting{false};
-void count() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
-}
-}  // namespace
-
-extern "C" {
-void* __real_malloc(std::size_t);
-void* __real_calloc(std::size_t, std::size_t);
-void* __real_realloc(void*, std::size_t);
-void* __real_aligned_alloc(std::size_t, std::size_t);
-void* __wrap_malloc(std::size_t n) { count(); return __real_malloc(n); }
-void* __wrap_calloc(std::size_t a, std::size_t b) { count(); return __real_calloc(a, b); }
-void* __wrap_realloc(void* p, std::size_t n) { count(); return __real_realloc(p, n); }
-void* __wrap_aligned_alloc(std::size_t a, std::size_t n) { count(); return __real_aligned_alloc(a, n); }
-}
-
-void* operator new(std::size_t n) {
-  count();
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new(std::size_t n, std::align_val_t a) {
-  count();
-  const std::size_t align = static_cast<std::size_t>(a);
-  if (void* p = std::aligned_alloc(align, (n + align - 1) / align * align)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n, std::align_val_t a) { return operator new(n, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "hmpc/platform/linux/heap_monitor.hpp"
 
 namespace {
 
 using namespace hmpc::sec24;
 using M = Mpcs<double>;
+namespace heap_monitor = hmpc::platform::heap_monitor;
 
 template <class Mpc>
 long allocations_in_closed_loop(Mpc& mpc) {
   const Parameters<double> p;
   Vector2<double> x = initial_state<double>();
   mpc.initialize(x, kOfflineIterations);
-  g_allocations = 0;
-  g_counting = true;
+  const auto before = heap_monitor::allocations();
+  heap_monitor::arm();
   for (int k = 0; k < 60; ++k) {
     const Vector2<double> u = mpc.update(x);
     x = integrate_plant(p, x, u, kSamplingPeriod);
   }
-  g_counting = false;
-  return g_allocations.load();
+  heap_monitor::disarm();
+  return static_cast<long>(heap_monitor::allocations() - before);
 }
 
 TEST(HostAllocation, CounterSeesAllocations) {
-  g_allocations = 0;
-  g_counting = true;
+  const auto before = heap_monitor::allocations();
+  heap_monitor::arm();
   auto v = std::make_unique<std::vector<int>>(100);
-  void* raw = std::malloc(16);
-  g_counting = false;
+  void* volatile raw = std::malloc(16);  // volatile: the compiler may not elide the pair
+  heap_monitor::disarm();
   std::free(raw);
-  EXPECT_GE(g_allocations.load(), 3);
+  EXPECT_GE(heap_monitor::allocations() - before, 3u);
 }
 
 TEST(HostAllocation, MpcLoopsDoNotAllocate) {

@@ -30,7 +30,7 @@
 
 #include "can_frames.hpp"
 #include "forearm_board.hpp"
-#include "heap_monitor.hpp"
+#include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/platform/linux/socketcan.hpp"
 #include "options.hpp"
 #include "tick_log.hpp"
@@ -43,6 +43,7 @@ using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
 using hmpc::platform::SocketCan;
+namespace heap_monitor = hmpc::platform::heap_monitor;
 using Board = hmpc::firmware::ForearmBoard<double>;
 
 constexpr const char* kProgram = "hmpc-forearm-board";

@@ -1,7 +1,7 @@
-// The linker sends this program's calls to malloc & co. to the __wrap_ functions below (see
-// CMakeLists.txt). Calls made inside shared libraries bypass --wrap, libstdc++'s operator new
+// The linker sends the program's calls to malloc & co. to the __wrap_ functions below (the
+// hmpc::heap_monitor target carries the --wrap options). Calls made inside shared libraries bypass --wrap, libstdc++'s operator new
 // among them, so operator new is replaced here to allocate through the wrapped malloc.
-#include "heap_monitor.hpp"
+#include "hmpc/platform/linux/heap_monitor.hpp"
 
 #include <atomic>
 #include <cstddef>
@@ -19,11 +19,11 @@ void note_allocation() {
 }
 }  // namespace
 
-namespace hmpc::linux_board::heap_monitor {
+namespace hmpc::platform::heap_monitor {
 void arm() { g_armed.store(true); }
 void disarm() { g_armed.store(false); }
 std::uint64_t allocations() { return g_allocations.load(); }
-}  // namespace hmpc::linux_board::heap_monitor
+}  // namespace hmpc::platform::heap_monitor
 
 extern "C" {
 void* __real_malloc(std::size_t);
