@@ -31,8 +31,9 @@ namespace {
 // -ffp-contract=off and no vectorisation; only libm (newlib vs glibc) differs, by an ulp at
 // most, which iterative solves may amplify slightly. Float runs are compared more loosely.
 constexpr double kRelativeTolerance = sizeof(Scalar) == 8 ? 1e-9 : 1e-4;
-// Core clock for the time estimate: STM32H743 (Cortex-M7) 480 MHz; STM32G474 (M4) 170 MHz.
-constexpr int kClockMHz = sizeof(Scalar) == 8 ? 480 : 170;
+// Core clock for the time estimate: our STM32H743 board (Cortex-M7) 400 MHz; STM32G474 (M4)
+// 170 MHz.
+constexpr int kClockMHz = sizeof(Scalar) == 8 ? 400 : 170;
 // A compiled-in compute model must predict each run's total instructions this closely.
 constexpr double kComputeModelTolerance = 0.15;
 

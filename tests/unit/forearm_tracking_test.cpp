@@ -1,6 +1,6 @@
 // The strategies of Table 3.1 tracking the thesis's +-30 deg sinusoids for 10 s on the model
 // (RK4 plant at 1 ms), each update's output delayed by its compute time on the board, a
-// Cortex-M7 at 480 MHz (compute model fitted to QEMU instruction counts, 1 cycle per
+// Cortex-M7 at 400 MHz (compute model fitted to QEMU instruction counts, 1 cycle per
 // instruction). What the thesis's Figs. 3.3b, 3.6 and 3.8 show that this idealised setting
 // reproduces is asserted here; see the closing note of issue 3 for what it does not.
 #include <gtest/gtest.h>

@@ -107,14 +107,15 @@ void set_time(TwoLayerMpc<Upper, Nu, Fast, Nf, Layer>& mpc, typename Upper::Scal
   mpc.fast_subsystem().set_start_time(t);
 }
 
-// Compute time of the forearm strategies on an STM32H743 (Cortex-M7, 480 MHz, double FPU):
+// Compute time of the forearm strategies on the STM32H743 board (Cortex-M7 at the 400 MHz our
+// board image runs at, firmware/boards/stm32h7; 480 MHz parts run 1.2x faster), double FPU:
 // instructions per unit of solver work, a least-squares fit (R^2 0.9997 over 1500 updates of
 // all six strategies) to the per-update instruction counts of the Cortex-M7 image under QEMU
 // (tests/firmware, forearm runs; that test fails if this model drifts more than 15 % from what
 // the image measures: re-fit it from the test's output when the solver changes). One cycle
 // per instruction is an assumption: QEMU counts instructions, not cycles.
 constexpr ComputeCostModel kCortexM7ComputeModel{
-    2964, {918.6, 3782.8}, {1276.4, 1276.4}, 480e6, 1.0};
+    2964, {918.6, 3782.8}, {1276.4, 1276.4}, 400e6, 1.0};
 
 // No computation delay: the new input acts at the sample it was computed for.
 struct NoComputeDelay {
