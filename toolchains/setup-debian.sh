@@ -9,6 +9,8 @@ packages=(
   g++ cmake ninja-build make pkgconf
   # libraries
   libeigen3-dev googletest libgtest-dev libbenchmark-dev
+  # rigid-body reference and HIL plants
+  libsimbody-dev
   # bare-metal Cortex-M (newlib-nano, libstdc++ for newlib)
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   # ARM64 Linux cross toolchain

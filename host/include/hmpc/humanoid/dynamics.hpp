@@ -1,0 +1,66 @@
+// Rigid-body dynamics of the humanoid (thesis Eq. 2.41) by Featherstone's algorithms
+// ("Rigid Body Dynamics Algorithms", 2008): the composite-rigid-body algorithm for M(q)
+// (Table 6.2), the recursive Newton-Euler algorithm for inverse dynamics and the bias forces
+// (Table 5.1, floating base as a 6-DoF joint whose motion subspace is the identity, gravity as
+// a fictitious base acceleration), and forward dynamics by a fixed-size Cholesky
+// factorisation of M.
+//
+// Sign convention: M(q) a + c(q, v) = tau, i.e. c is Featherstone's bias force C (Coriolis,
+// centrifugal and gravity). The thesis writes Eq. 2.41a as M v_dot = c + u, so its c is -c here.
+// tau's first six entries are a spatial force on the torso in torso coordinates (moment about
+// the torso origin first); they are zero for the robot, whose base is unactuated.
+//
+// Everything is fixed-size Eigen and no call allocates. An instance holds its workspace, so
+// use one instance per thread.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <array>
+
+#include "hmpc/humanoid/model.hpp"
+
+namespace hmpc::humanoid {
+
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
+// Poses and velocities of every body, for costs, contact and checks.
+struct Kinematics {
+  std::array<Matrix3, kBodies> rotation;   // body to world
+  std::array<Vector3, kBodies> position;   // body origin in world
+  std::array<Vector6, kBodies> velocity;   // spatial velocity (omega, v_origin), body coords
+};
+
+class Dynamics {
+ public:
+  explicit Dynamics(const Model& model = Model{});
+
+  const Model& model() const { return model_; }
+
+  // CRBA: the joint-space inertia matrix M(q), symmetric positive definite.
+  const MassMatrix& mass_matrix(const Configuration& q);
+  // RNEA: tau = M(q) a + c(q, v).
+  Velocity inverse_dynamics(const Configuration& q, const Velocity& v, const Velocity& a);
+  // c(q, v) = RNEA with a = 0.
+  Velocity bias_forces(const Configuration& q, const Velocity& v);
+  // a = M^-1 (tau - c), by Cholesky (LLT) of M.
+  Velocity forward_dynamics(const Configuration& q, const Velocity& v, const Velocity& tau);
+
+  void kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const;
+
+ private:
+  void update_transforms(const Configuration& q);
+
+  Model model_;
+  std::array<Matrix6, kBodies> inertia_;     // spatial inertia about the body origin
+  std::array<Vector6, kBodies> subspace_;    // motion subspace S of revolute joints
+  // Workspace.
+  std::array<Matrix6, kBodies> transform_;   // X from parent (or world) to body coordinates
+  std::array<Vector6, kBodies> velocity_, acceleration_, force_;
+  std::array<Matrix6, kBodies> composite_;
+  MassMatrix mass_matrix_;
+  Eigen::LLT<MassMatrix> cholesky_;
+};
+
+}  // namespace hmpc::humanoid

@@ -1,0 +1,85 @@
+// The one source of truth for the seven-link humanoid's physical parameters (thesis Sec. 2.5.1:
+// a torso and three links per leg, height 1.59 m, mass 47.0 kg).
+//
+// Segment data: de Leva, P. (1996), "Adjustments to Zatsiorsky-Seluyanov's segment inertia
+// parameters", J. Biomechanics 29(9), 1223-1230, female columns (mass fractions, centre-of-mass
+// positions and radii of gyration referred to joint centres; mean segment lengths of the
+// reference subject, stature 1.735 m). Lengths are scaled by stature / 1.735 m, masses by
+// 47.0 kg. The torso link lumps head, trunk and both arms hanging at the sides (anatomical
+// position); model.cpp combines them with the parallel-axis theorem.
+// Where de Leva gives no number (hip and shoulder spacing, foot geometry below the ankle) the
+// value is marked "choice" or taken from Drillis & Contini's body-height fractions as
+// reproduced in Winter, D.A. (2009), "Biomechanics and Motor Control of Human Movement",
+// 4th ed., Fig. 4.1.
+#pragma once
+
+#include <array>
+
+namespace hmpc::humanoid {
+
+// One row of de Leva's table. Radii of gyration are fractions of the segment length about the
+// segment's principal axes: sagittal (antero-posterior), transverse (medio-lateral) and
+// longitudinal (along the segment).
+struct Segment {
+  double mass_fraction;          // of total body mass
+  double com_from_proximal;      // centre of mass, fraction of length from the proximal end
+  double reference_length;       // [m] mean length of de Leva's female reference subject
+  double gyration_sagittal;
+  double gyration_transverse;
+  double gyration_longitudinal;
+};
+
+// Joint order within one leg, the same for both legs (q and v list the left leg first).
+enum LegJoint : int { kHipAbduction = 0, kHipFlexion = 1, kKnee = 2, kAnkle = 3, kJointsPerLeg = 4 };
+
+struct Parameters {
+  double stature = 1.59;     // [m] thesis Sec. 2.5.1
+  double body_mass = 47.0;   // [kg] thesis Sec. 2.5.1
+  double gravity = 9.81;     // [m/s^2]
+  double reference_stature = 1.735;  // [m] de Leva (1996), female reference subject
+
+  // de Leva (1996), female: {mass, CoM from proximal, length [m], r_sag, r_trans, r_long}.
+  Segment head{0.0668, 0.4841, 0.2437, 0.271, 0.295, 0.261};       // vertex - cervicale
+  Segment trunk{0.4257, 0.4964, 0.6148, 0.307, 0.292, 0.147};      // cervicale - mid-hip
+  Segment upper_arm{0.0255, 0.5754, 0.2751, 0.278, 0.260, 0.148};  // shoulder - elbow centre
+  Segment forearm{0.0138, 0.4559, 0.2643, 0.261, 0.257, 0.094};    // elbow - wrist centre
+  Segment hand{0.0056, 0.7474, 0.0780, 0.531, 0.454, 0.335};       // wrist - 3rd metacarpale
+  Segment thigh{0.1478, 0.3612, 0.3695, 0.369, 0.364, 0.162};      // hip - knee centre
+  Segment shank{0.0481, 0.4416, 0.4323, 0.271, 0.267, 0.093};      // knee - lateral malleolus
+  Segment foot{0.0129, 0.4014, 0.2283, 0.299, 0.279, 0.139};       // heel - toe tip
+  // de Leva's mass fractions sum to 0.9999 (rounding); model.cpp divides by their sum so the
+  // model's total mass is exactly body_mass.
+
+  // Geometry de Leva does not give, as fractions of stature unless stated.
+  double hip_joint_spacing = 0.10;  // choice: 0.159 m between hip joint centres (adult range
+                                    // 0.15-0.18 m)
+  double shoulder_height = 0.818;   // above the floor: Drillis & Contini (Winter Fig. 4.1)
+  double shoulder_width = 0.259;    // biacromial: Drillis & Contini (Winter Fig. 4.1); the
+                                    // shoulder joint centres are taken at this spacing
+  double heel_behind_ankle = 0.22;  // choice: fraction of foot length from heel to ankle
+  double foot_com_height = 0.5;     // choice: fraction of the ankle height above the sole
+  // The ankle (lateral malleolus) height above the sole is what stature leaves after head,
+  // trunk, thigh and shank: 0.0747 m in the reference subject (Winter's Fig. 4.1: 0.039 H =
+  // 0.068 m), so the standing model is exactly `stature` tall.
+
+  // Ranges of motion [rad], per LegJoint, for both legs: normal adult values of the American
+  // Academy of Orthopaedic Surgeons (Greene & Heckman 1994). Positive = abduction, hip
+  // flexion, knee flexion, ankle dorsiflexion (see model.hpp for the axes).
+  std::array<double, kJointsPerLeg> joint_lower{
+      -0.5236,   // hip adduction 30 deg
+      -0.5236,   // hip extension 30 deg
+      0.0,       // knee fully extended
+      -0.8727};  // ankle plantarflexion 50 deg
+  std::array<double, kJointsPerLeg> joint_upper{
+      0.7854,    // hip abduction 45 deg
+      2.0944,    // hip flexion 120 deg
+      2.3562,    // knee flexion 135 deg
+      0.3491};   // ankle dorsiflexion 20 deg
+
+  // Torque limits [N m], symmetric. The thesis gives none: choice of roughly 3 N m per kg of
+  // body mass at the hip and knee (peak isometric human values for a 47 kg adult are of this
+  // order), less for abduction and the ankle.
+  std::array<double, kJointsPerLeg> torque_limit{100.0, 150.0, 150.0, 100.0};
+};
+
+}  // namespace hmpc::humanoid

@@ -1,0 +1,169 @@
+#include "hmpc/humanoid/dynamics.hpp"
+
+#include <Eigen/Geometry>
+
+namespace hmpc::humanoid {
+namespace {
+
+Matrix3 skew(const Vector3& x) {
+  Matrix3 s;
+  s << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
+  return s;
+}
+
+// Plücker motion transform (Featherstone Ch. 2) from frame A to frame B, B rotated by E (A to
+// B coordinates) and with origin r in A coordinates: X = [E 0; -E r^ E].
+Matrix6 motion_transform(const Matrix3& E, const Vector3& r) {
+  Matrix6 X;
+  X.topLeftCorner<3, 3>() = E;
+  X.topRightCorner<3, 3>().setZero();
+  X.bottomLeftCorner<3, 3>() = -E * skew(r);
+  X.bottomRightCorner<3, 3>() = E;
+  return X;
+}
+
+// Spatial cross products (Featherstone Ch. 2) for motion (crm) and force (crf = -crm^T).
+Vector6 cross_motion(const Vector6& v, const Vector6& m) {
+  Vector6 out;
+  out.head<3>() = v.head<3>().cross(m.head<3>());
+  out.tail<3>() = v.head<3>().cross(m.tail<3>()) + v.tail<3>().cross(m.head<3>());
+  return out;
+}
+Vector6 cross_force(const Vector6& v, const Vector6& f) {
+  Vector6 out;
+  out.head<3>() = v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>());
+  out.tail<3>() = v.head<3>().cross(f.tail<3>());
+  return out;
+}
+
+// Spatial inertia about the body origin from mass, CoM c and central inertia:
+// [I_c + m c^ c^T, m c^; m c^T, m 1].
+Matrix6 spatial_inertia(double m, const Vector3& c, const Matrix3& inertia_com) {
+  const Matrix3 cx = skew(c);
+  Matrix6 I;
+  I.topLeftCorner<3, 3>() = inertia_com + m * cx * cx.transpose();
+  I.topRightCorner<3, 3>() = m * cx;
+  I.bottomLeftCorner<3, 3>() = m * cx.transpose();
+  I.bottomRightCorner<3, 3>() = m * Matrix3::Identity();
+  return I;
+}
+
+constexpr int dof_of(int body) { return kBaseDofs + body - 1; }
+
+}  // namespace
+
+Dynamics::Dynamics(const Model& model) : model_(model) {
+  for (int i = 0; i < kBodies; ++i) {
+    const Body& b = model_.bodies[i];
+    inertia_[i] = spatial_inertia(b.mass, b.com, b.inertia);
+    subspace_[i] << b.axis, Vector3::Zero();
+  }
+  // mass_matrix() writes the entries of each joint and its ancestors; the rest, joints on
+  // different legs, never couple.
+  mass_matrix_.setZero();
+}
+
+void Dynamics::update_transforms(const Configuration& q) {
+  // Floating base: q = (p, quaternion w x y z); the world-to-torso transform has E = R^T.
+  const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
+  transform_[0] = motion_transform(orientation.normalized().toRotationMatrix().transpose(),
+                                   q.head<3>());
+  for (int i = 1; i < kBodies; ++i) {
+    const Body& b = model_.bodies[i];
+    // X = X_J(q) X_T: translate to the joint, then rotate about its axis.
+    const Matrix3 E = Eigen::AngleAxisd(q[7 + i - 1], b.axis).toRotationMatrix().transpose();
+    transform_[i] = motion_transform(E, b.joint_origin);
+  }
+}
+
+const MassMatrix& Dynamics::mass_matrix(const Configuration& q) {
+  update_transforms(q);
+  // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X.
+  for (int i = 0; i < kBodies; ++i) composite_[i] = inertia_[i];
+  for (int i = kBodies - 1; i > 0; --i) {
+    composite_[model_.bodies[i].parent] += transform_[i].transpose() * composite_[i] * transform_[i];
+  }
+  // Base block: S_0 = identity, so M_00 = I^c_0.
+  mass_matrix_.topLeftCorner<6, 6>() = composite_[0];
+  for (int i = kBodies - 1; i > 0; --i) {
+    // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
+    // carried to each ancestor j it gives M_ji = S_j^T F.
+    Vector6 F = composite_[i] * subspace_[i];
+    mass_matrix_(dof_of(i), dof_of(i)) = subspace_[i].dot(F);
+    int j = i;
+    while (model_.bodies[j].parent >= 0) {
+      F = transform_[j].transpose() * F;
+      j = model_.bodies[j].parent;
+      if (j == 0) {
+        mass_matrix_.block<6, 1>(0, dof_of(i)) = F;
+        mass_matrix_.block<1, 6>(dof_of(i), 0) = F.transpose();
+      } else {
+        const double m = subspace_[j].dot(F);
+        mass_matrix_(dof_of(j), dof_of(i)) = m;
+        mass_matrix_(dof_of(i), dof_of(j)) = m;
+      }
+    }
+  }
+  return mass_matrix_;
+}
+
+Velocity Dynamics::inverse_dynamics(const Configuration& q, const Velocity& v, const Velocity& a) {
+  update_transforms(q);
+  // Gravity as a fictitious upward acceleration of the world: a_world = -(0, g).
+  Vector6 world_acceleration;
+  world_acceleration << Vector3::Zero(), -model_.gravity;
+  // Forward pass (Table 5.1): v_i = X_i v_parent + S_i qd_i,
+  // a_i = X_i a_parent + S_i qdd_i + v_i x S_i qd_i; f_i = I_i a_i + v_i x* I_i v_i.
+  // The base joint has S = 1: v_0 and a_0 are v and a's first six entries.
+  velocity_[0] = v.head<6>();
+  acceleration_[0] = transform_[0] * world_acceleration + a.head<6>();
+  for (int i = 1; i < kBodies; ++i) {
+    const int parent = model_.bodies[i].parent;
+    const Vector6 joint_velocity = subspace_[i] * v[dof_of(i)];
+    velocity_[i] = transform_[i] * velocity_[parent] + joint_velocity;
+    acceleration_[i] = transform_[i] * acceleration_[parent] + subspace_[i] * a[dof_of(i)] +
+                       cross_motion(velocity_[i], joint_velocity);
+  }
+  for (int i = 0; i < kBodies; ++i) {
+    force_[i] = inertia_[i] * acceleration_[i] + cross_force(velocity_[i], inertia_[i] * velocity_[i]);
+  }
+  // Backward pass: tau_i = S_i^T f_i, f_parent += X_i^T f_i.
+  Velocity tau;
+  for (int i = kBodies - 1; i > 0; --i) {
+    tau[dof_of(i)] = subspace_[i].dot(force_[i]);
+    force_[model_.bodies[i].parent] += transform_[i].transpose() * force_[i];
+  }
+  tau.head<6>() = force_[0];
+  return tau;
+}
+
+Velocity Dynamics::bias_forces(const Configuration& q, const Velocity& v) {
+  return inverse_dynamics(q, v, Velocity::Zero());
+}
+
+Velocity Dynamics::forward_dynamics(const Configuration& q, const Velocity& v, const Velocity& tau) {
+  const Velocity c = bias_forces(q, v);
+  cholesky_.compute(mass_matrix(q));
+  return cholesky_.solve(tau - c);
+}
+
+void Dynamics::kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const {
+  const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
+  out.rotation[0] = orientation.normalized().toRotationMatrix();
+  out.position[0] = q.head<3>();
+  out.velocity[0] = v.head<6>();
+  for (int i = 1; i < kBodies; ++i) {
+    const Body& b = model_.bodies[i];
+    const Matrix3 joint_rotation = Eigen::AngleAxisd(q[7 + i - 1], b.axis).toRotationMatrix();
+    out.rotation[i] = out.rotation[b.parent] * joint_rotation;
+    out.position[i] = out.position[b.parent] + out.rotation[b.parent] * b.joint_origin;
+    // Body velocity: the parent's velocity moved to the joint, rotated into the body frame,
+    // plus the joint rate about the axis.
+    const Vector3 omega = out.velocity[b.parent].head<3>();
+    const Vector3 v_joint = out.velocity[b.parent].tail<3>() + omega.cross(b.joint_origin);
+    out.velocity[i].head<3>() = joint_rotation.transpose() * omega + b.axis * v[dof_of(i)];
+    out.velocity[i].tail<3>() = joint_rotation.transpose() * v_joint;
+  }
+}
+
+}  // namespace hmpc::humanoid
