@@ -1,0 +1,132 @@
+#include "hmpc/humanoid/contact.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace hmpc::humanoid {
+namespace {
+
+// log(1 + e^x) without overflow: max(x, 0) + log1p(e^-|x|).
+double softplus(double x) { return std::max(x, 0.0) + std::log1p(std::exp(-std::abs(x))); }
+
+// The logistic function, softplus' derivative, without overflow.
+double logistic(double x) {
+  if (x >= 0.0) return 1.0 / (1.0 + std::exp(-x));
+  const double e = std::exp(x);
+  return e / (1.0 + e);
+}
+
+Matrix3 skew(const Vector3& x) {
+  Matrix3 s;
+  s << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
+  return s;
+}
+
+}  // namespace
+
+PointJacobian point_jacobian(const Model& model, const Kinematics& kinematics, int body,
+                             const Vector3& local) {
+  // Base columns from p_dot = R (v_o + omega x (p - p_0)_torso); joint columns
+  // (R_b axis_b) x (p - p_b) for every joint b between the torso and the body.
+  const Vector3 p = kinematics.position[body] + kinematics.rotation[body] * local;
+  PointJacobian J = PointJacobian::Zero();
+  J.leftCols<3>() = -skew(p - kinematics.position[0]) * kinematics.rotation[0];
+  J.middleCols<3>(3) = kinematics.rotation[0];
+  for (int b = body; b > 0; b = model.bodies[b].parent) {
+    J.col(kBaseDofs + b - 1) = (kinematics.rotation[b] * model.bodies[b].axis).cross(p - kinematics.position[b]);
+  }
+  return J;
+}
+
+ContactModel::ContactModel(const Model& model, const Parameters& p, const ContactParameters& contact)
+    : model_(model), contact_(contact) {
+  // Sole rectangle in foot coordinates (origin at the ankle joint, x forward): heel and toe
+  // tip from the foot length, sole plane sole_height below the ankle.
+  const double foot_length = p.stature / p.reference_stature * p.foot.reference_length;
+  const double heel = -p.heel_behind_ankle * foot_length;
+  const double toe = heel + foot_length;
+  const double half_breadth = 0.5 * contact_.foot_breadth * p.stature;
+  const double sole = -model_.sole_height;
+  for (int leg = 0; leg < 2; ++leg) {
+    const int foot = Model::body_of(leg, kAnkle);
+    const int first = leg * kFootPoints;
+    points_[first + 0] = {foot, Vector3(heel, half_breadth, sole)};
+    points_[first + 1] = {foot, Vector3(heel, -half_breadth, sole)};
+    points_[first + 2] = {foot, Vector3(toe, half_breadth, sole)};
+    points_[first + 3] = {foot, Vector3(toe, -half_breadth, sole)};
+  }
+  // Seat points. Thigh coordinates: origin at the hip joint centre, femur along -z, posterior
+  // surface on -x (it faces down when the hip is flexed by 90 degrees).
+  const double thigh_length = p.stature / p.reference_stature * p.thigh.reference_length;
+  int i = kSolePoints;
+  for (int side = 0; side < 2; ++side) {
+    const double y = side == 0 ? contact_.ischium_half_spacing : -contact_.ischium_half_spacing;
+    points_[i++] = {0, Vector3(-contact_.ischium_behind_hip, y, -contact_.ischium_below_hip)};
+  }
+  for (int leg = 0; leg < 2; ++leg) {
+    const int thigh = Model::body_of(leg, kHipFlexion);
+    for (double fraction : {0.30, 0.75}) {
+      points_[i++] = {thigh, Vector3(-contact_.thigh_half_depth, 0.0, -fraction * thigh_length)};
+    }
+  }
+}
+
+double ContactModel::seat_window(double x) const {
+  const double w = contact_.seat_edge;
+  return logistic((x - contact_.seat_x_min) / w) * logistic((contact_.seat_x_max - x) / w);
+}
+
+Vector3 ContactModel::point_force(double gap, const Vector3& velocity, double scale,
+                                  Matrix3* dforce) const {
+  const ContactParameters& c = contact_;
+  const double s = c.smoothing, eps = c.clamp_smoothing;
+  const double depth = s * softplus(-gap / s);                       // (C1)
+  const double rate_factor = 1.0 - c.damping * velocity.z();         // 1 + c delta_dot
+  const double clamp = eps * softplus(rate_factor / eps);            // g
+  const double normal = scale * c.stiffness * depth * clamp;         // (C2)
+  const Eigen::Vector2d slip = velocity.head<2>();
+  const double slip_norm = std::sqrt(slip.squaredNorm() + c.slip_velocity * c.slip_velocity);
+  Vector3 force;
+  force.head<2>() = -c.friction * normal / slip_norm * slip;          // (C3)
+  force.z() = normal;
+  if (dforce != nullptr) {
+    dforce->setZero();
+    // d(C3)/dv_t = -mu F_n (1 / r - v_t v_t^T / r^3), r = sqrt(|v_t|^2 + v_s^2).
+    dforce->topLeftCorner<2, 2>() =
+        -c.friction * normal / slip_norm *
+        (Eigen::Matrix2d::Identity() - slip * slip.transpose() / (slip_norm * slip_norm));
+    // d(C2)/dphi_dot = -k delta g'(y) c, g' the logistic.
+    (*dforce)(2, 2) = -scale * c.stiffness * depth * logistic(rate_factor / eps) * c.damping;
+  }
+  return force;
+}
+
+void ContactModel::evaluate(const Kinematics& kinematics, const Velocity& v, ContactState& out) const {
+  out.count = contact_.chair ? kContactPoints : kSolePoints;
+  for (int i = 0; i < out.count; ++i) {
+    const ContactPoint& point = points_[i];
+    const Vector3 p = kinematics.position[point.body] + kinematics.rotation[point.body] * point.local;
+    out.jacobian[i] = point_jacobian(model_, kinematics, point.body, point.local);
+    out.position[i] = p;
+    out.velocity[i] = out.jacobian[i] * v;
+    const bool seat = i >= kSolePoints;
+    const double gap = seat ? p.z() - contact_.seat_height : p.z();
+    const double scale = seat ? seat_window(p.x()) : 1.0;
+    out.force[i] = point_force(gap, out.velocity[i], scale, &out.force_velocity[i]);
+  }
+}
+
+Velocity ContactModel::generalized_force(const ContactState& state) {
+  Velocity tau = Velocity::Zero();
+  for (int i = 0; i < state.count; ++i) tau.noalias() += state.jacobian[i].transpose() * state.force[i];
+  return tau;
+}
+
+VerticalLoad vertical_load(const ContactState& state) {
+  VerticalLoad load;
+  for (int i = 0; i < state.count; ++i) (i < kSolePoints ? load.sole : load.seat) += state.force[i].z();
+  return load;
+}
+
+}  // namespace hmpc::humanoid
