@@ -11,6 +11,8 @@ packages=(
   libeigen3-dev googletest libgtest-dev libbenchmark-dev
   # rigid-body reference and HIL plants
   libsimbody-dev
+  # DDS between the host programs (C API; cyclonedds-tools has idlc for idlc_generate)
+  cyclonedds-dev cyclonedds-tools
   # bare-metal Cortex-M (newlib-nano, libstdc++ for newlib)
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   # ARM64 Linux cross toolchain
