@@ -24,6 +24,7 @@
 #include <type_traits>
 
 #include "hmpc/control/load_velocity_feedback_pid.hpp"
+#include "hmpc/mpc/compute_model.hpp"
 #include "hmpc/models/forearm_mpc.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
@@ -76,6 +77,14 @@ struct BoardConfig {
   }();
   forearm::Parameters<Scalar> model{};
   forearm::CostWeights<Scalar> weights{};
+  // HIL lock-step only: the processor this board emulates. Each MPC step is charged the
+  // compute time this model predicts from the solver's work (mpc/compute_model.hpp): its
+  // output acts only that many ticks later, the previous output holding meanwhile, and no new
+  // step starts before it is done, as on the thesis's real board, which had no solver
+  // deadline (Sec. 3.4.2: a late solve delays the control). A step charged over
+  // mpc_budget_s counts as an overrun but, unlike a real deadline miss, leads to no fallback:
+  // the HIL compares strategies as the thesis ran them. nullptr: no emulation.
+  const ComputeCostModel* emulated_target = nullptr;
 };
 
 struct BoardCounters {
@@ -86,6 +95,7 @@ struct BoardCounters {
   std::uint32_t fallbacks = 0;         // run -> hold after repeated bad steps
   std::uint32_t refused_commands = 0;  // valid frames asking for a transition not allowed now
   std::uint32_t mpc_steps = 0;
+  std::uint32_t syncs = 0;             // valid HIL lock-step Sync frames
 };
 
 template <typename Scalar>
@@ -151,6 +161,11 @@ class ForearmBoard {
         if (receiver_.decode(frame, g) == proto::DecodeResult::kOk) on_gains(g);
         break;
       }
+      case proto::FrameType::kSync: {  // the board support ticks on it in lock-step
+        proto::Sync s;
+        if (receiver_.decode(frame, s) == proto::DecodeResult::kOk) ++counters_.syncs;
+        break;
+      }
       default:  // frames this board sends, not receives
         break;
     }
@@ -173,12 +188,17 @@ class ForearmBoard {
     ++ticks_;
     if (mode_ == proto::BoardMode::kBoot) mode_ = proto::BoardMode::kIdle;  // self-check: config
     check_watchdogs();
+    if (solve_pending_ && ticks_ >= plan_ready_tick_) {
+      plan_ = pending_plan_;
+      solve_pending_ = false;
+    }
     switch (mode_) {
       case proto::BoardMode::kHold: hold_step(); break;
       case proto::BoardMode::kRun: apply_plan(); break;
       default: outputs_ = {config_.safe_v_p, config_.safe_v_m}; break;
     }
-    mpc_due_ = mode_ == proto::BoardMode::kRun && ticks_ % kTicksPerMpcStep == 0;
+    mpc_due_ = mode_ == proto::BoardMode::kRun && ticks_ % kTicksPerMpcStep == 0 &&
+               !solve_pending_;
     send_telemetry();
   }
 
@@ -203,20 +223,37 @@ class ForearmBoard {
     const double deadline = start + config_.mpc_budget_s;
     const auto stop = [this, deadline] { return clock_ && clock_() > deadline; };
     SolveStatus status = SolveStatus::kConverged;
+    Control plan;
     with_strategy([&](auto& mpc) {
       forearm::set_time(mpc, host_time());
-      plan_ = mpc.update(x_, stop);
+      plan = mpc.update(x_, stop);
       usable_ = mpc.last_plan_usable();
       last_work_ = mpc.last_work();
       last_iterations_ = mpc.last_iterations();
       record_layers(mpc, status);
     });
-    const double elapsed = clock_ ? clock_() - start : 0.0;
     ++counters_.mpc_steps;
-    const bool overrun = clock_ && elapsed > config_.mpc_budget_s;
+    const ComputeCostModel* target = config_.emulated_target;
+    double elapsed = 0.0;
+    bool overrun = false;
+    if (target) {
+      elapsed = target->seconds(last_work_);
+      overrun = elapsed > config_.mpc_budget_s;
+      // Ready after the charged time, at the first tick not earlier; within one tick it is
+      // as soon as on a real board, whose solve runs between ticks.
+      const double ticks_late = std::ceil(elapsed / double(kTick));
+      plan_ready_tick_ = ticks_ + std::uint32_t(ticks_late < 1.0 ? 1.0 : ticks_late);
+      pending_plan_ = plan;
+      solve_pending_ = true;
+    } else {
+      elapsed = clock_ ? clock_() - start : 0.0;
+      overrun = clock_ && elapsed > config_.mpc_budget_s;
+      plan_ = plan;
+    }
     counters_.solver_failures += usable_ ? 0 : 1;
     counters_.overruns += overrun ? 1 : 0;
-    consecutive_bad_steps_ = (!usable_ || overrun) ? consecutive_bad_steps_ + 1 : 0;
+    const bool counts_as_bad = !usable_ || (overrun && !target);
+    consecutive_bad_steps_ = counts_as_bad ? consecutive_bad_steps_ + 1 : 0;
     telemetry_.status = static_cast<proto::SolveStatusCode>(status);
     telemetry_.solve_time_us = static_cast<std::uint16_t>(
         elapsed * 1e6 < 65535.0 ? elapsed * 1e6 : 65535.0);
@@ -363,6 +400,7 @@ class ForearmBoard {
     needs_initialization_ = true;
     if (target_.sample_count() == 0) target_.set_constant(x_(0));  // hold where it is
     plan_ = Control(Scalar(0), config_.model.k_vp * x_(2));
+    solve_pending_ = false;
     mode_ = proto::BoardMode::kRun;
   }
 
@@ -471,6 +509,9 @@ class ForearmBoard {
   Scalar hold_angle_ = 0;
   typename Pid::State pid_state_{};
   Control plan_ = Control::Zero();
+  Control pending_plan_ = Control::Zero();  // emulated target: computed, not yet ready
+  bool solve_pending_ = false;
+  std::uint32_t plan_ready_tick_ = 0;
   bool usable_ = true;
   int last_iterations_ = 0;
   LayerWork last_work_{};

@@ -1,6 +1,6 @@
 // hmpc-forearm-board on vcan0, with this test as both host and plant. ctest runs it through
 // hil/vcan/run-with-vcan.sh (natively or in a QEMU guest). Each case starts the board as a
-// child process, node 3, lock-step: every Sensor frame the plant sends is one board tick, so
+// child process, node 3, lock-step: every Sync frame the plant sends is one board tick, so
 // the test counts ticks exactly whatever the speed of the machine; ModeCommand heartbeats go
 // every 10 ticks. At the end the board is stopped with SIGTERM and must say goodbye with safe
 // outputs, exit 0 and report no heap allocation in its loop.
@@ -194,8 +194,8 @@ class BusRig {
     next_sample_us_ = stream_start_us_;
   }
 
-  // One tick: heartbeat when due, samples, the sensor frame; then the board's
-  // ActuatorCommand, which the plant applies for 1 ms.
+  // One tick: heartbeat when due, samples, the sensor frame and the Sync that ticks the
+  // board; then the board's ActuatorCommand, which the plant applies for 1 ms.
   void step(Heartbeat heartbeat = Heartbeat::kOn) {
     if (heartbeat == Heartbeat::kOn && steps_ % kHeartbeatPeriodTicks == 0) send_heartbeat();
     while (streaming_ && next_sample_us_ <= now_us() + 300000) {
@@ -206,7 +206,8 @@ class BusRig {
       next_sample_us_ += 4000;
     }
     send(encode(plant_, proto::SensorSample{float(x_(0)), float(x_(1)), float(x_(2) / 10), 0}));
-    ASSERT_TRUE(await_actuator_command()) << "no ActuatorCommand for sensor frame " << steps_;
+    send(encode(plant_, proto::Sync{std::uint32_t(steps_), 0}));
+    ASSERT_TRUE(await_actuator_command()) << "no ActuatorCommand for Sync " << steps_;
     x_ = hmpc::forearm::integrate(params_, x_, Eigen::Vector2d(command_.v_m, command_.v_p),
                                   1e-3);
     ++steps_;
@@ -315,7 +316,7 @@ TEST_F(ForearmBoardOnVcan, AnswersHeartbeatsInIdleWithSafeOutputs) {
   rig_.command(RequestedMode::kIdle);
   const double rate = timed_run(50);
   std::printf("lock-step, idle: %.0f ticks/s\n", rate);
-  EXPECT_EQ(rig_.actuator_commands(), 50);  // one per sensor frame
+  EXPECT_EQ(rig_.actuator_commands(), 50);  // one per Sync
   EXPECT_GE(rig_.status_frames(), 4);       // every 10 ticks
   EXPECT_EQ(rig_.status().mode, BoardMode::kIdle);
   EXPECT_EQ(rig_.status().faults, 0);
@@ -383,7 +384,7 @@ TEST_F(ForearmBoardOnVcan, GoesSafeWithinTwoHeartbeatPeriodsWhenTheHeartbeatStop
   ASSERT_GT(rig_.command().v_p, 0.5f);
   const std::uint64_t last_heartbeat_step = rig_.steps() - 5;  // heartbeats every 10 steps
 
-  // The ActuatorCommand answering a sensor frame carries that tick's outputs.
+  // The ActuatorCommand answering a Sync carries that tick's outputs.
   while (rig_.command().v_p != 0.0f && rig_.steps() < last_heartbeat_step + 100 &&
          !HasFatalFailure()) {
     rig_.step(BusRig::Heartbeat::kOff);

@@ -125,6 +125,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     try_decoder<ActuatorOutputs>(receiver, frame, tally);
     try_decoder<SolveTelemetry>(receiver, frame, tally);
     try_decoder<Gains>(receiver, frame, tally);
+    try_decoder<Sync>(receiver, frame, tally);
   }
   std::uint64_t rejected = 0;
   for (const Receiver& receiver : receivers) rejected += receiver.rejects.total();

@@ -5,9 +5,11 @@
 // Receiver, so every one of them must pass the protocol's checks too.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "forearm_board.hpp"
 #include "hmpc/models/forearm.hpp"
@@ -42,8 +44,9 @@ struct StepOptions {
 
 class Rig {
  public:
-  explicit Rig(double theta0 = 0.0, Board::WallClock clock = nullptr)
-      : board_(std::make_unique<Board>(config(), clock)),
+  explicit Rig(double theta0 = 0.0, Board::WallClock clock = nullptr,
+               const Board::Config& board_config = config())
+      : board_(std::make_unique<Board>(board_config, clock)),
         x_(theta0, 0.0, hmpc::forearm::equilibrium_pressure(params_, theta0)) {
     deliver(encode(host_, kHoldGains));
   }
@@ -462,6 +465,58 @@ TEST(ForearmBoard, RepeatedOverrunsFallBackToHold) {
   EXPECT_EQ(board.mode(), BoardMode::kHold);
   EXPECT_LT(std::abs(rig.plant()(0)), 0.05);
   EXPECT_GT(rig.last_command().v_p, 0.5f);
+}
+
+// HIL lock-step emulation of the target's compute time: a solve charged 10 ms acts 10 ticks
+// after it started, the previous output holding meanwhile; no step starts while one is
+// pending, so steps come every 12 ticks (the next 4 ms boundary); each counts as an overrun
+// but, as on the thesis's board, causes no fallback.
+TEST(ForearmBoard, EmulatedTargetDelaysEachOutputByItsChargedComputeTime) {
+  hmpc::ComputeCostModel ten_ms_per_solve{};
+  ten_ms_per_solve.instructions_per_update = 4e6;
+  ten_ms_per_solve.clock_hz = 400e6;
+  Board::Config config = Rig::config();
+  config.emulated_target = &ten_ms_per_solve;
+  Rig rig(0.0, nullptr, config);
+  Board& board = rig.board();
+  start_tracking(rig, Strategy::kTwoStage);
+  std::vector<std::uint64_t> step_ticks, change_ticks;
+  float previous_v_m = rig.last_command().v_m;
+  std::uint32_t steps = board.counters().mpc_steps;
+  for (int i = 0; i < 240; ++i) {
+    rig.run(1);
+    if (board.counters().mpc_steps != steps) step_ticks.push_back(board.ticks());
+    if (rig.last_command().v_m != previous_v_m) change_ticks.push_back(board.ticks());
+    steps = board.counters().mpc_steps;
+    previous_v_m = rig.last_command().v_m;
+  }
+  ASSERT_GE(step_ticks.size(), 19u);
+  for (std::size_t i = 1; i < step_ticks.size(); ++i) {
+    EXPECT_EQ(step_ticks[i] - step_ticks[i - 1], 12u) << "step " << i;
+  }
+  // The motor output changes only when a solve becomes ready, 10 ticks after it started.
+  ASSERT_FALSE(change_ticks.empty());
+  for (const std::uint64_t t : change_ticks) {
+    EXPECT_NE(std::find(step_ticks.begin(), step_ticks.end(), t - 10), step_ticks.end())
+        << "output changed at tick " << t << " with no solve started 10 ticks before";
+  }
+  EXPECT_EQ(board.counters().overruns, board.counters().mpc_steps);
+  EXPECT_EQ(board.counters().fallbacks, 0u);
+  EXPECT_EQ(board.mode(), BoardMode::kRun);
+}
+
+// Charged less than a tick, a solve acts at the next tick and steps keep their 4 ms period.
+TEST(ForearmBoard, EmulatedFastTargetKeepsTheFourMillisecondPeriod) {
+  hmpc::ComputeCostModel instant{};
+  instant.clock_hz = 400e6;
+  Board::Config config = Rig::config();
+  config.emulated_target = &instant;
+  Rig rig(0.0, nullptr, config);
+  start_tracking(rig, Strategy::kTwoStage);
+  const std::uint32_t before = rig.board().counters().mpc_steps;
+  run_tracking(rig, 400, nullptr);
+  EXPECT_EQ(rig.board().counters().mpc_steps - before, 100u);
+  EXPECT_EQ(rig.board().counters().overruns, 0u);
 }
 
 }  // namespace

@@ -5,8 +5,10 @@
 //                        deadline. Expirations that find the loop still busy are counted as
 //                        timer overruns and their ticks caught up at once, so the tick count,
 //                        the board's only clock, keeps real time for its watchdogs.
-//   --lockstep (HIL)     each valid Sensor frame from the plant is one tick and the MPC has no
-//                        deadline: a run is deterministic, however fast the machine.
+//   --lockstep (HIL)     each valid Sync frame from the plant (sent after that millisecond's
+//                        Sensor frame) is one tick and the MPC has no deadline: a run is
+//                        deterministic, however fast the machine. With --emulate-target the
+//                        board charges each solve the target's compute time instead.
 // A tick's frames are sent as soon as it ends, before the MPC step, as a board whose control
 // interrupt preempts the solver would. On SIGINT, SIGTERM or the end of --duration the board
 // sends a last ActuatorCommand with the safe outputs and prints a summary of key=value pairs.
@@ -109,18 +111,14 @@ class BoardLoop {
       : board_(board), can_(can), node_(config.node), safe_{config.safe_v_p, config.safe_v_m},
         log_(log), safe_sender_(config.node) {}
 
-  // Passes a received frame to the board. True when it was a Sensor reading the board
-  // accepted: in lock-step, the plant's cue for one tick.
+  // Passes a received frame to the board. True when it was a Sync the board accepted: in
+  // lock-step, the plant's cue for one tick.
   bool deliver(const CanFrame& can_frame) {
     proto::Frame frame;
     if (!to_protocol_frame(can_frame, frame)) return false;
-    proto::FrameType type;
-    proto::NodeId node;
-    const bool sensor = proto::identify(frame.id, type, node) && node == node_ &&
-                        type == proto::FrameType::kSensor;
-    const std::uint32_t rejected_before = board_.rejects().total();
+    const std::uint32_t syncs_before = board_.counters().syncs;
     board_.on_frame(frame);
-    return sensor && board_.rejects().total() == rejected_before;
+    return board_.counters().syncs != syncs_before;
   }
 
   // One 1 kHz tick, its log row and its frames; true when the MPC step is due.
@@ -180,7 +178,7 @@ class BoardLoop {
 };
 
 // Delivers up to kMaxFramesPerDrain queued frames, telling on_frame whether each was an
-// accepted Sensor reading. False on a receive error (in `error`).
+// accepted Sync. False on a receive error (in `error`).
 template <class OnFrame>
 bool drain(SocketCan& can, BoardLoop& loop, OnFrame&& on_frame, LoopFailure& failure) {
   for (int i = 0; i < kMaxFramesPerDrain; ++i) {
@@ -212,8 +210,8 @@ StopReason run_lockstep(Board& board, BoardLoop& loop, SocketCan& can, int signa
     }
     if (fds[1].revents & POLLIN) return StopReason::kSignal;
     if (fds[0].revents == 0) continue;
-    const bool ok = drain(can, loop, [&](bool sensor_accepted) {
-      if (sensor_accepted && loop.tick(monotonic_seconds() - start_s)) board.run_mpc();
+    const bool ok = drain(can, loop, [&](bool sync_accepted) {
+      if (sync_accepted && loop.tick(monotonic_seconds() - start_s)) board.run_mpc();
     }, failure);
     if (!ok) return StopReason::kBusError;
   }
@@ -317,6 +315,7 @@ int main(int argc, char** argv) {
 
   Board::Config config;
   config.node = options.node;
+  if (options.emulate_cortex_m7) config.emulated_target = &hmpc::forearm::kCortexM7ComputeModel;
   // Lock-step has no deadline: the simulator, not this machine, decides how long a solve takes.
   static Board board(config, options.lockstep ? nullptr : &monotonic_seconds);
   BoardLoop loop(board, config, can, log);
@@ -325,8 +324,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: note: mlockall failed (%s): page faults may delay ticks\n",
                  kProgram, std::strerror(errno));
   }
-  std::printf("%s: node %u on %s, %s: ready\n", kProgram, unsigned(options.node),
-              options.interface.c_str(), options.lockstep ? "lock-step" : "real time, 1 kHz");
+  std::printf("%s: node %u on %s, %s%s: ready\n", kProgram, unsigned(options.node),
+              options.interface.c_str(), options.lockstep ? "lock-step" : "real time, 1 kHz",
+              options.emulate_cortex_m7 ? ", emulating the Cortex-M7's compute time" : "");
   std::fflush(stdout);
 
   LoopFailure failure;

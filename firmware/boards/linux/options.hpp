@@ -16,6 +16,7 @@ struct Options {
   std::string interface = "vcan0";
   forearm_protocol::NodeId node = 0;
   bool lockstep = false;
+  bool emulate_cortex_m7 = false;  // lock-step: charge solves the STM32H743's compute time
   double duration_s = 0;  // 0: until SIGINT or SIGTERM
   std::string log_path;   // empty: no log
 };
@@ -30,12 +31,15 @@ inline void print_usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: hmpc-forearm-board [--interface IFACE] [--node N] [--lockstep]\n"
-      "                          [--duration SECONDS] [--log FILE]\n"
+      "                          [--emulate-target cortex-m7] [--duration SECONDS] [--log FILE]\n"
       "  --interface IFACE   SocketCAN interface, e.g. can0 or vcan0 (default: vcan0)\n"
       "  --node N            board node id on the bus, 0..15 (default: 0)\n"
-      "  --lockstep          HIL lock-step: each valid Sensor frame from the plant is one 1 kHz\n"
+      "  --lockstep          HIL lock-step: each valid Sync frame from the plant is one 1 kHz\n"
       "                      tick, and the MPC has no wall-clock deadline (deterministic)\n"
       "                      (default: real time, ticks paced by a 1 kHz CLOCK_MONOTONIC timer)\n"
+      "  --emulate-target cortex-m7\n"
+      "                      with --lockstep: each MPC output acts after the compute time the\n"
+      "                      STM32H743 board (Cortex-M7, 400 MHz) would take for that solve\n"
       "  --duration SECONDS  stop after this long (default: run until SIGINT or SIGTERM)\n"
       "  --log FILE          write mode and outputs of every tick as CSV at exit (the last\n"
       "                      %d minutes are kept in memory meanwhile)\n"
@@ -55,7 +59,8 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
       options.lockstep = true;
       continue;
     }
-    if (arg != "--interface" && arg != "--node" && arg != "--duration" && arg != "--log") {
+    if (arg != "--interface" && arg != "--node" && arg != "--duration" && arg != "--log" &&
+        arg != "--emulate-target") {
       error = "unknown option '" + arg + "'";
       return ParseOutcome::kError;
     }
@@ -89,6 +94,12 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
         return ParseOutcome::kError;
       }
       options.duration_s = seconds;
+    } else if (arg == "--emulate-target") {
+      if (value != "cortex-m7") {
+        error = "--emulate-target knows only 'cortex-m7', got '" + value + "'";
+        return ParseOutcome::kError;
+      }
+      options.emulate_cortex_m7 = true;
     } else {
       if (value.empty()) {
         error = "--log needs a file name";
@@ -96,6 +107,10 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
       }
       options.log_path = value;
     }
+  }
+  if (options.emulate_cortex_m7 && !options.lockstep) {
+    error = "--emulate-target needs --lockstep (in real time the solver's own time counts)";
+    return ParseOutcome::kError;
   }
   return ParseOutcome::kRun;
 }

@@ -79,8 +79,9 @@ enum class FrameType : std::uint8_t {
   kActuatorOutputs,   // board -> host: applied voltages and the torques they produce
   kSolveTelemetry,    // board -> host: MPC solve of the last control period
   kGains,             // host -> board: hold-mode PID gains
+  kSync,              // plant (HIL simulator) -> board: lock-step clock tick
 };
-inline constexpr std::size_t kFrameTypeCount = 9;
+inline constexpr std::size_t kFrameTypeCount = 10;
 
 struct FrameSpec {
   FrameType type;
@@ -104,6 +105,7 @@ inline constexpr FrameSpec kFrames[kFrameTypeCount] = {
   {FrameType::kActuatorOutputs,  "ActuatorOutputs",  0x6, 8, Endpoint::kBoard, Endpoint::kHost,    4},
   {FrameType::kSolveTelemetry,   "SolveTelemetry",   0x7, 8, Endpoint::kBoard, Endpoint::kHost,    4},
   {FrameType::kGains,            "Gains",            0x8, 8, Endpoint::kHost,  Endpoint::kBoard,   0},
+  {FrameType::kSync,             "Sync",             0x9, 8, Endpoint::kPlant, Endpoint::kBoard,   1},
 };
 // clang-format on
 
@@ -229,9 +231,10 @@ enum class Signal : std::uint8_t {
   kSolveTelemetryCoarseIterations, kSolveTelemetryFineIterations, kSolveTelemetrySolveTime,
   kSolveTelemetryTrackingError,
   kGainsChecksum, kGainsCounter, kGainsKp, kGainsKi, kGainsKd, kGainsLoadVelocity,
+  kSyncChecksum, kSyncCounter, kSyncTick,
 };
 // clang-format on
-inline constexpr std::size_t kSignalCount = 52;
+inline constexpr std::size_t kSignalCount = 55;
 
 struct SignalSpec {
   Signal signal;
@@ -320,6 +323,10 @@ inline constexpr SignalSpec kSignals[kSignalCount] = {
   {Signal::kGainsKi,                         FrameType::kGains,            "ki",               24, 12, ByteOrder::kLittleEndian, false, 0.1,     0, 0,       400,        "V/(rad.s)", SignalKind::kPhysical,    {}},
   {Signal::kGainsKd,                         FrameType::kGains,            "kd",               36, 12, ByteOrder::kLittleEndian, false, 0.005,   0, 0,       20,         "V.s/rad",   SignalKind::kPhysical,    {}},
   {Signal::kGainsLoadVelocity,               FrameType::kGains,            "k_lv",             48, 12, ByteOrder::kLittleEndian, true,  0.001,   0, -2,      2,          "V.s/rad",   SignalKind::kPhysical,    {}},
+
+  {Signal::kSyncChecksum,                    FrameType::kSync,             "checksum",          0,  8, ByteOrder::kLittleEndian, false, 1,       0, 0,       255,        "",          SignalKind::kChecksum,    {}},
+  {Signal::kSyncCounter,                     FrameType::kSync,             "counter",           8,  4, ByteOrder::kLittleEndian, false, 1,       0, 0,       15,         "",          SignalKind::kCounter,     {}},
+  {Signal::kSyncTick,                        FrameType::kSync,             "tick",             32, 32, ByteOrder::kLittleEndian, false, 1,       0, 0,       4294967295, "ms",        SignalKind::kInteger,     {}},
 };
 // clang-format on
 
@@ -489,6 +496,22 @@ struct Gains {
     visitor(Signal::kGainsKi, self.ki);
     visitor(Signal::kGainsKd, self.kd);
     visitor(Signal::kGainsLoadVelocity, self.k_lv);
+  }
+};
+
+// HIL lock-step clock (absent on the real robot, where the board's own timer ticks): one
+// frame per simulated millisecond, sent after that millisecond's Sensor frame. A board in
+// lock-step runs one tick per valid Sync, so it keeps time even when sensor frames are lost,
+// like a board with its own crystal, while the simulation waits for it. (The same role as
+// CANopen's SYNC object.)
+struct Sync {
+  static constexpr FrameType kType = FrameType::kSync;
+  std::uint32_t tick = 0;  // simulated milliseconds since the plant started, modulo 2^32
+  std::uint8_t counter = 0;
+  template <class Self, class Visitor>
+  static constexpr void visit(Self& self, Visitor&& visitor) {
+    visitor(Signal::kSyncCounter, self.counter);
+    visitor(Signal::kSyncTick, self.tick);
   }
 };
 
@@ -889,6 +912,7 @@ static_assert(detail::visits_exactly_its_signals<JointState>());
 static_assert(detail::visits_exactly_its_signals<ActuatorOutputs>());
 static_assert(detail::visits_exactly_its_signals<SolveTelemetry>());
 static_assert(detail::visits_exactly_its_signals<Gains>());
+static_assert(detail::visits_exactly_its_signals<Sync>());
 
 // ---------------------------------------------------------------------------------------
 // Codec
