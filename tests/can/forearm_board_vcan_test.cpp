@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "can_frames.hpp"
+#include "hmpc/platform/linux/protocol_frames.hpp"
 #include "hmpc/models/forearm.hpp"
 #include "hmpc/platform/linux/socketcan.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
@@ -31,8 +31,8 @@ extern char** environ;
 namespace {
 
 namespace proto = hmpc::forearm_protocol;
-using hmpc::linux_board::to_can_frame;
-using hmpc::linux_board::to_protocol_frame;
+using hmpc::platform::to_can_frame;
+using hmpc::platform::to_protocol_frame;
 using hmpc::platform::CanFilter;
 using hmpc::platform::CanFrame;
 using hmpc::platform::CanStatus;

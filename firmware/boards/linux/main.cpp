@@ -30,7 +30,7 @@
 #include <cstring>
 #include <string>
 
-#include "can_frames.hpp"
+#include "hmpc/platform/linux/protocol_frames.hpp"
 #include "forearm_board.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/platform/linux/socketcan.hpp"
@@ -45,6 +45,8 @@ using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
 using hmpc::platform::SocketCan;
+using hmpc::platform::to_can_frame;
+using hmpc::platform::to_protocol_frame;
 namespace heap_monitor = hmpc::platform::heap_monitor;
 using Board = hmpc::firmware::ForearmBoard<double>;
 
@@ -294,10 +296,7 @@ int main(int argc, char** argv) {
   CanResult opened = can.open(options.interface.c_str());
   // Only this node's frames: the board ignores the rest anyway, and a busy bus then costs
   // the kernel's filter, not the loop.
-  const hmpc::platform::CanFilter this_node{
-      proto::frame_id(proto::FrameType::kModeCommand, options.node),
-      (hmpc::platform::kCanStandardIdMask & ~(proto::kNodeIdStride - 1)) |
-          hmpc::platform::kCanExtendedId | hmpc::platform::kCanRemoteRequest};
+  const hmpc::platform::CanFilter this_node = hmpc::platform::node_filter(options.node);
   if (opened.ok()) opened = can.set_filters(&this_node, 1);
   if (opened.ok()) opened = can.set_non_blocking(true);
   if (!opened.ok()) {

@@ -15,13 +15,7 @@
 
 namespace hmpc::linux_board {
 
-// The DBC's name of an enumerated signal value (BoardMode, Strategy, ...), or "?".
-template <std::size_t N>
-const char* value_name(const forearm_protocol::EnumValue (&values)[N], std::uint32_t value) {
-  for (const auto& v : values)
-    if (v.value == value) return v.name;
-  return "?";
-}
+using forearm_protocol::value_name;
 
 class TickLog {
  public:

@@ -188,6 +188,14 @@ inline constexpr EnumValue kSolveStatusValues[] = {
     {0, "converged"},     {1, "iteration_cap"},     {2, "budget_exhausted"}, {3, "stalled"},
     {4, "invalid_input"}, {5, "numerical_failure"}, {6, "no_solve"}};
 
+// The DBC's name of an enumerated signal value (BoardMode, Strategy, ...), or "?".
+template <std::size_t N>
+constexpr const char* value_name(const EnumValue (&values)[N], std::uint32_t value) {
+  for (const auto& v : values)
+    if (v.value == value) return v.name;
+  return "?";
+}
+
 struct EnumValueList {
   const EnumValue* values = nullptr;
   std::uint8_t count = 0;

@@ -1,0 +1,518 @@
+// hmpc-forearm-host: the host forearm controller (issue 4). Drives one forearm board over CAN
+// (ForearmCanMaster: heartbeat, mode and strategy, target trajectory streaming), logs what the
+// board reports, and bridges to Cyclone DDS: publishes the board's state and MPC telemetry,
+// takes validated commands (mode, strategy, target) from operators (hmpc-forearm-cli).
+//
+// Paced in real time by a 1 kHz timer, or in HIL lock-step by the plant's Sync frames (one
+// host tick per simulated millisecond). A scripted session (--run) asks for idle with faults
+// cleared, then hold, then run with the given strategy and target, then hold again; without
+// it the board stays idle until a DDS command arrives. Fault injection on the host's frames
+// (--drop-percent, --corrupt-percent, --silence-at, --stop-heartbeat-at) exercises the board's
+// defences. At the end: a summary of key=value pairs.
+#include <poll.h>
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <sys/timerfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fault_injector.hpp"
+#include "hmpc/cli/arguments.hpp"
+#include "hmpc/dds/forearm_dds.hpp"
+#include "hmpc/host/forearm_can_master.hpp"
+#include "hmpc/platform/linux/protocol_frames.hpp"
+
+namespace {
+
+namespace proto = hmpc::forearm_protocol;
+using hmpc::host::ForearmCanMaster;
+using hmpc::platform::CanFrame;
+using hmpc::platform::CanResult;
+using hmpc::platform::CanStatus;
+using hmpc::platform::SocketCan;
+
+constexpr const char* kProgram = "hmpc-forearm-host";
+constexpr double kDegree = M_PI / 180;
+// Scripted session: idle with faults cleared, hold from kHoldAt, run from --run-at.
+constexpr double kHoldAt = 0.05;  // s
+
+struct Options {
+  std::string interface = "vcan0";
+  proto::NodeId node = 0;
+  bool lockstep = false;
+  double duration_s = 0;  // host seconds; 0: until SIGINT/SIGTERM
+  bool scripted = false;
+  proto::Strategy strategy = proto::Strategy::kTwoStage;
+  double amplitude = 30 * kDegree, frequency_hz = 1.0, offset = 0;
+  double run_at_s = 0.3, run_for_s = 10;
+  long dds_domain = -1;  // < 0: no DDS
+  bool dds_loopback = false;
+  hmpc::hil::FaultConfig faults{};
+  double stop_heartbeat_at_s = -1;
+  std::string log_path;
+};
+
+void print_usage(std::FILE* out) {
+  std::fprintf(out,
+      "usage: hmpc-forearm-host [--interface IFACE] [--node N] [--lockstep] [--duration S]\n"
+      "         [--run STRATEGY [--amplitude-deg A] [--frequency HZ] [--offset-deg D]\n"
+      "          [--run-at S] [--run-for S]] [--dds-domain ID [--dds-loopback]]\n"
+      "         [--drop-percent P] [--corrupt-percent P] [--silence-at S] [--silence-ms MS]\n"
+      "         [--stop-heartbeat-at S] [--seed N] [--log FILE]\n"
+      "  --interface IFACE     SocketCAN interface (default vcan0)\n"
+      "  --node N              board node id 0..15 (default 0)\n"
+      "  --lockstep            one host tick per Sync frame of the HIL plant (default: 1 kHz timer)\n"
+      "  --duration S          stop after S s of host time (default: until SIGINT/SIGTERM)\n"
+      "  --run STRATEGY        scripted session: idle, hold at %.2f s, run STRATEGY from --run-at\n"
+      "                        for --run-for s, then hold; STRATEGY: fine_4ms fine_8ms\n"
+      "                        coarse_20ms coarse_40ms two_stage pam_only\n"
+      "  --amplitude-deg A     target sinusoid amplitude, deg (default 30)\n"
+      "  --frequency HZ        target sinusoid frequency (default 1)\n"
+      "  --offset-deg D        target offset, deg (default 0)\n"
+      "  --run-at S, --run-for S  (default 0.3 and 10)\n"
+      "  --dds-domain ID       bridge to Cyclone DDS on this domain: state and telemetry out,\n"
+      "                        commands in (hmpc-forearm-cli)\n"
+      "  --dds-loopback        DDS on 127.0.0.1 only, without multicast\n"
+      "  --drop-percent P, --corrupt-percent P, --silence-at S, --silence-ms MS, --seed N\n"
+      "                        faults on the host's frames to the board\n"
+      "  --stop-heartbeat-at S the host stops sending heartbeats at S (a dead host)\n"
+      "  --log FILE            CSV of every SolveTelemetry report (4 ms)\n"
+      "Exit status: 0 at the end of --duration or on SIGINT/SIGTERM; 1 when the bus, DDS or\n"
+      "the log fails; 2 for bad arguments.\n",
+      kHoldAt);
+}
+
+bool strategy_from_name(const std::string& name, proto::Strategy& out) {
+  for (const proto::EnumValue& v : proto::kStrategyValues) {
+    if (name == v.name) {
+      out = proto::Strategy(v.value);
+      return true;
+    }
+  }
+  return false;
+}
+
+hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
+  hmpc::cli::OptionParser p;
+  p.text("--interface", [&](const std::string& v) -> std::string {
+    if (v.empty() || v.size() >= 16) return hmpc::cli::bad_value("--interface", "a name of 1..15 characters", v);
+    o.interface = v;
+    return {};
+  });
+  p.integer("--node", 0, proto::kMaxNodeId, o.node);
+  p.flag("--lockstep", o.lockstep);
+  p.number("--duration", 1e-3, 1e6, "a number of seconds in [0.001, 1e6]", o.duration_s);
+  p.text("--run", [&](const std::string& v) -> std::string {
+    if (!strategy_from_name(v, o.strategy))
+      return hmpc::cli::bad_value("--run", "one of fine_4ms fine_8ms coarse_20ms coarse_40ms "
+                                           "two_stage pam_only", v);
+    o.scripted = true;
+    return {};
+  });
+  p.number("--amplitude-deg", 0, 57, "an amplitude in [0, 57] deg", o.amplitude, kDegree);
+  p.number("--frequency", 0, 5, "a frequency in [0, 5] Hz", o.frequency_hz);
+  p.number("--offset-deg", -57, 57, "an offset in [-57, 57] deg", o.offset, kDegree);
+  p.number("--run-at", kHoldAt + 0.05, 1e5, "a time in [0.1, 1e5] s", o.run_at_s);
+  p.number("--run-for", 0.001, 1e5, "a duration in [0.001, 1e5] s", o.run_for_s);
+  p.integer("--dds-domain", 0, 230, o.dds_domain);
+  p.flag("--dds-loopback", o.dds_loopback);
+  p.number("--drop-percent", 0, 100, "a percentage in [0, 100]", o.faults.drop_fraction, 0.01);
+  p.number("--corrupt-percent", 0, 100, "a percentage in [0, 100]", o.faults.corrupt_fraction,
+           0.01);
+  double silence_at = -1, silence_ms = 100;
+  p.number("--silence-at", 0, 1e6, "a time in [0, 1e6] s", silence_at);
+  p.number("--silence-ms", 1, 1e6, "a duration in [1, 1e6] ms", silence_ms);
+  p.number("--stop-heartbeat-at", 0, 1e6, "a time in [0, 1e6] s", o.stop_heartbeat_at_s);
+  p.integer("--seed", 0, 2147483647L, o.faults.seed);
+  p.text("--log", [&](const std::string& v) -> std::string {
+    if (v.empty()) return "--log needs a file name";
+    o.log_path = v;
+    return {};
+  });
+  const auto outcome = p.parse(argc, argv, error);
+  if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
+  o.faults.silence_start_s = silence_at;
+  o.faults.silence_duration_s = silence_at >= 0 ? silence_ms * 1e-3 : 0;
+  // The board faults past its software limits (firmware BoardConfig): the target stays inside.
+  const auto& limits = hmpc::dds::command_limits();
+  if (o.scripted && (o.offset - o.amplitude < limits.theta_min_rad ||
+                     o.offset + o.amplitude > limits.theta_max_rad)) {
+    error = "the target offset +- amplitude must lie within the board's joint limits [" +
+            std::to_string(limits.theta_min_rad) + ", " + std::to_string(limits.theta_max_rad) +
+            "] rad";
+    return hmpc::cli::ParseOutcome::kError;
+  }
+  if (o.dds_loopback && o.dds_domain < 0) {
+    error = "--dds-loopback needs --dds-domain";
+    return hmpc::cli::ParseOutcome::kError;
+  }
+  return outcome;
+}
+
+double monotonic_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
+}
+
+std::string describe(const CanResult& result) {
+  std::string text = hmpc::platform::to_string(result.status);
+  if (result.error_number != 0) text += std::string(" (") + std::strerror(result.error_number) + ")";
+  return text;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// The host: master, bus, faults, DDS and log, one tick per host millisecond.
+class Host {
+ public:
+  Host(const Options& o, SocketCan& can, hmpc::dds::ForearmDdsBridge* dds, std::FILE* log)
+      : o_(o), can_(can), dds_(dds), log_(log), master_({o.node}), sender_(o.node),
+        sync_receiver_(o.node),
+        faults_(o.faults) {
+    solve_times_us_.reserve(std::size_t(std::max(1.0, o.duration_s) * 260));
+  }
+
+  // One host tick at host time t: the script or DDS commands, then the frames due.
+  bool tick(double t, std::string& error) {
+    now_s_ = t;
+    if (o_.scripted) script(t);
+    if (dds_) {
+      dds_->poll_commands([&](const hmpc::dds::ForearmCommandSample& c) { on_command(c, t); });
+      if (run_end_s_ > 0 && t >= run_end_s_) {
+        master_.request(proto::RequestedMode::kHold, master_.requested_strategy());
+        master_.stop_streaming();
+        run_end_s_ = -1;
+      }
+    }
+    const bool heartbeat = !(o_.stop_heartbeat_at_s >= 0 && t >= o_.stop_heartbeat_at_s);
+    bool ok = true;
+    master_.tick(t, heartbeat, [&](const auto& message) {
+      proto::Frame frame;
+      if (sender_.encode(message, frame) != proto::EncodeResult::kOk) return;
+      if (faults_.apply(t, frame) == hmpc::hil::FaultAction::kDrop) return;
+      const CanResult sent = can_.send(hmpc::platform::to_can_frame(frame));
+      if (sent.ok()) {
+        ++frames_sent_;
+      } else if (sent.status != CanStatus::kWouldBlock &&
+                 sent.status != CanStatus::kTransmitQueueFull) {
+        error = "sending failed: " + describe(sent);
+        ok = false;
+      }
+    });
+    return ok;
+  }
+
+  // A frame from the bus. Returns true for the plant's Sync (a lock-step host tick).
+  bool on_frame(const CanFrame& raw, std::uint32_t& sync_tick) {
+    ++frames_received_;
+    proto::Frame frame;
+    if (!hmpc::platform::to_protocol_frame(raw, frame)) return false;
+    proto::FrameType type;
+    proto::NodeId node;
+    if (proto::identify(frame.id, type, node) && node == o_.node) {
+      if (type == proto::FrameType::kSync) {
+        proto::Sync sync;
+        if (sync_receiver_.decode(frame, sync) != proto::DecodeResult::kOk) return false;
+        sync_tick = sync.tick;
+        return true;
+      }
+      if (type != proto::FrameType::kSensor && type != proto::FrameType::kActuatorCommand)
+        ++board_report_frames_;
+    }
+    if (master_.on_frame(frame)) on_telemetry();
+    return false;
+  }
+
+  void print_summary(double wall_s) const {
+    const auto& r = master_.report();
+    const auto& f = faults_.counters();
+    double max_solve = 0;
+    for (double s : solve_times_us_) max_solve = std::max(max_solve, s);
+    // Bus load at 1 Mbit/s, worst-case bit stuffing (as forearm_protocol::bus_load): all frames
+    // this node's traffic put on the bus, and the host-board part alone (the real robot's).
+    const double seconds = std::max(now_s_, 1e-3);
+    const double all_frames = double(frames_received_ + frames_sent_);
+    const double robot_frames = double(board_report_frames_ + frames_sent_);
+    std::printf(
+        "%s: summary host_seconds=%.3f wall_seconds=%.3f run_start_s=%.3f run_end_s=%.3f "
+        "frames_sent=%llu frames_received=%llu bus_load_hil_1mbit=%.4f bus_load_robot_1mbit=%.4f "
+        "board_mode=%s board_faults=0x%02x board_strategy=%s board_rejected_frames=%u "
+        "board_watchdog_trips=%u board_solver_failures=%u board_overruns=%u "
+        "telemetry_frames=%llu solves=%zu solve_time_max_us=%.0f solve_time_median_us=%.0f "
+        "host_rejected_frames=%u frames_dropped=%llu frames_corrupted=%llu frames_silenced=%llu "
+        "dds_commands=%llu dds_rejected_commands=%llu\n",
+        kProgram, now_s_, wall_s, run_start_s_, run_stop_s_,
+        static_cast<unsigned long long>(frames_sent_),
+        static_cast<unsigned long long>(frames_received_),
+        all_frames * proto::kWorstCaseFrameBits / (seconds * 1e6),
+        robot_frames * proto::kWorstCaseFrameBits / (seconds * 1e6),
+        proto::value_name(proto::kBoardModeValues, std::uint32_t(r.status.mode)),
+        unsigned(r.status.faults),
+        proto::value_name(proto::kStrategyValues, std::uint32_t(r.status.strategy)),
+        unsigned(r.status.rejected_frames), unsigned(r.status.watchdog_trips),
+        unsigned(r.status.solver_failures), unsigned(r.status.overruns),
+        static_cast<unsigned long long>(r.telemetry_frames), solve_times_us_.size(), max_solve,
+        median(solve_times_us_), master_.rejects().total(),
+        static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
+        static_cast<unsigned long long>(f.silenced),
+        static_cast<unsigned long long>(dds_commands_),
+        static_cast<unsigned long long>(dds_ ? dds_->rejected_commands() : 0));
+  }
+
+ private:
+  void script(double t) {
+    if (t < kHoldAt) {
+      master_.request(proto::RequestedMode::kIdle, o_.strategy, t == 0);
+    } else if (t < o_.run_at_s) {
+      master_.request(proto::RequestedMode::kHold, o_.strategy);
+    } else if (t < o_.run_at_s + o_.run_for_s) {
+      if (!master_.streaming()) {
+        master_.stream_sinusoid(o_.amplitude, o_.frequency_hz, o_.offset, t);
+        run_start_s_ = t;
+      }
+      master_.request(proto::RequestedMode::kRun, o_.strategy);
+    } else if (master_.streaming()) {
+      master_.stop_streaming();
+      master_.request(proto::RequestedMode::kHold, o_.strategy);
+      run_stop_s_ = t;
+    }
+  }
+
+  void on_command(const hmpc::dds::ForearmCommandSample& c, double t) {
+    ++dds_commands_;
+    std::fprintf(stderr, "%s: DDS command %u at %.3f s: %s %s\n", kProgram,
+                 unsigned(c.sequence_number), t,
+                 proto::value_name(proto::kRequestedModeValues, std::uint32_t(c.mode)),
+                 proto::value_name(proto::kStrategyValues, std::uint32_t(c.strategy)));
+    master_.request(c.mode, c.strategy, c.clear_faults);
+    if (c.mode == proto::RequestedMode::kRun && c.target.kind == hmpc::dds::TargetKind::kSinusoid) {
+      master_.stream_sinusoid(c.target.amplitude_rad, c.target.frequency_hz, c.target.offset_rad,
+                              t);
+      run_start_s_ = t;
+      run_end_s_ = c.target.duration_s > 0 ? t + c.target.duration_s : -1;
+    } else if (c.mode != proto::RequestedMode::kRun) {
+      master_.stop_streaming();
+      run_end_s_ = -1;
+    } else {
+      // Run holding the current angle: the board holds where it is when it has no samples.
+      master_.stop_streaming();
+    }
+  }
+
+  void on_telemetry() {
+    const auto& r = master_.report();
+    const bool running = r.status.mode == proto::BoardMode::kRun;
+    if (running && r.telemetry.status != proto::SolveStatusCode::kNoSolve)
+      solve_times_us_.push_back(double(r.telemetry.solve_time_us));
+    const double theta_d = master_.streaming() ? master_.target_angle(now_s_) : NAN;
+    if (log_) {
+      std::fprintf(log_, "%.3f,%s,%s,%u,%.5f,%.5f,%.4f,%.4f,%.4f,%.4f,%u,%u,%u,%u\n", now_s_,
+                   proto::value_name(proto::kBoardModeValues, std::uint32_t(r.status.mode)),
+                   proto::value_name(proto::kStrategyValues, std::uint32_t(r.status.strategy)),
+                   unsigned(r.status.faults), r.joint.theta, theta_d, r.outputs.v_p,
+                   r.outputs.v_m, r.outputs.tau_p, r.outputs.tau_m,
+                   unsigned(r.telemetry.status), unsigned(r.telemetry.coarse_iterations),
+                   unsigned(r.telemetry.fine_iterations), unsigned(r.telemetry.solve_time_us));
+    }
+    if (dds_) {
+      hmpc::dds::ForearmStateSample s;
+      s.board_time_s = now_s_;
+      s.mode = r.status.mode;
+      s.faults = r.status.faults;
+      s.strategy = r.status.strategy;
+      s.theta = r.joint.theta;
+      s.theta_dot = r.joint.theta_dot;
+      s.pressure_mpa = r.joint.pressure;
+      s.theta_d = std::isfinite(theta_d) ? theta_d : r.joint.theta;
+      s.v_p = r.outputs.v_p;
+      s.v_m = r.outputs.v_m;
+      s.tau_p = r.outputs.tau_p;
+      s.tau_m = r.outputs.tau_m;
+      s.rejected_frames = r.status.rejected_frames;
+      s.watchdog_trips = r.status.watchdog_trips;
+      s.solver_failures = r.status.solver_failures;
+      s.overruns = r.status.overruns;
+      dds_->publish(s);
+      hmpc::dds::ForearmTelemetrySample m;
+      m.time_s = now_s_;
+      m.solve_status = r.telemetry.status;
+      m.coarse_iterations = r.telemetry.coarse_iterations;
+      m.fine_iterations = r.telemetry.fine_iterations;
+      m.solve_time_us = r.telemetry.solve_time_us;
+      m.tracking_error = r.telemetry.tracking_error;
+      dds_->publish(m);
+    }
+  }
+
+  const Options& o_;
+  SocketCan& can_;
+  hmpc::dds::ForearmDdsBridge* dds_;
+  std::FILE* log_;
+  ForearmCanMaster master_;
+  proto::Sender sender_;
+  proto::Receiver sync_receiver_;
+  hmpc::hil::FaultInjector faults_;
+  double now_s_ = 0;
+  double run_start_s_ = -1, run_stop_s_ = -1, run_end_s_ = -1;
+  std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
+  std::uint64_t dds_commands_ = 0;
+  std::vector<double> solve_times_us_;
+};
+
+enum class End { kDone, kSignal, kFailure };
+
+End run(const Options& o, SocketCan& can, Host& host, int signal_fd, std::string& error) {
+  int timer = -1;
+  if (!o.lockstep) {
+    timer = ::timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
+    const itimerspec every_ms{{0, 1'000'000}, {0, 1'000'000}};
+    if (timer < 0 || ::timerfd_settime(timer, 0, &every_ms, nullptr) < 0) {
+      error = std::string("timerfd: ") + std::strerror(errno);
+      return End::kFailure;
+    }
+  }
+  pollfd fds[3] = {{can.native_handle(), POLLIN, 0}, {signal_fd, POLLIN, 0}, {timer, POLLIN, 0}};
+  std::uint64_t ticks = 0;
+  End end = End::kDone;
+  const auto due = [&](std::uint64_t tick) { return o.duration_s <= 0 || tick * 1e-3 < o.duration_s; };
+  while (due(ticks)) {
+    if (::poll(fds, timer >= 0 ? 3 : 2, -1) < 0) {
+      if (errno == EINTR) continue;
+      error = std::string("poll: ") + std::strerror(errno);
+      end = End::kFailure;
+      break;
+    }
+    if (fds[1].revents & POLLIN) {
+      end = End::kSignal;
+      break;
+    }
+    if (fds[0].revents & POLLIN) {
+      CanFrame raw;
+      CanResult r;
+      while ((r = can.receive(raw, std::chrono::microseconds(0))).ok()) {
+        std::uint32_t sync_tick = 0;
+        if (host.on_frame(raw, sync_tick) && o.lockstep) {
+          ticks = sync_tick;
+          if (!due(ticks)) break;
+          if (!host.tick(1e-3 * double(sync_tick), error)) return End::kFailure;
+          ++ticks;
+        }
+      }
+      if (r.status != CanStatus::kTimeout && !r.ok()) {
+        error = "receiving failed: " + describe(r);
+        end = End::kFailure;
+        break;
+      }
+    }
+    if (timer >= 0 && (fds[2].revents & POLLIN)) {
+      std::uint64_t expirations = 0;
+      if (::read(timer, &expirations, sizeof expirations) != sizeof expirations) continue;
+      for (std::uint64_t i = 0; i < expirations && due(ticks); ++i, ++ticks) {
+        if (!host.tick(1e-3 * double(ticks), error)) {
+          end = End::kFailure;
+          break;
+        }
+      }
+      if (end == End::kFailure) break;
+    }
+  }
+  if (timer >= 0) ::close(timer);
+  return end;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  std::string error;
+  switch (parse(argc, argv, options, error)) {
+    case hmpc::cli::ParseOutcome::kHelp: print_usage(stdout); return 0;
+    case hmpc::cli::ParseOutcome::kError:
+      std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
+      print_usage(stderr);
+      return 2;
+    case hmpc::cli::ParseOutcome::kRun: break;
+  }
+
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  ::sigprocmask(SIG_BLOCK, &stop_signals, nullptr);
+  const int signal_fd = ::signalfd(-1, &stop_signals, SFD_CLOEXEC);
+  if (signal_fd < 0) {
+    std::fprintf(stderr, "%s: signalfd: %s\n", kProgram, std::strerror(errno));
+    return 1;
+  }
+
+  SocketCan can;
+  CanResult opened = can.open(options.interface.c_str());
+  const hmpc::platform::CanFilter this_node = hmpc::platform::node_filter(options.node);
+  if (opened.ok()) opened = can.set_filters(&this_node, 1);
+  if (opened.ok()) opened = can.set_non_blocking(true);
+  if (!opened.ok()) {
+    std::fprintf(stderr, "%s: cannot open CAN interface '%s': %s\n", kProgram,
+                 options.interface.c_str(), describe(opened).c_str());
+    return 1;
+  }
+
+  std::unique_ptr<hmpc::dds::ForearmDdsBridge> dds;
+  if (options.dds_domain >= 0) {
+    try {
+      dds = std::make_unique<hmpc::dds::ForearmDdsBridge>(
+          std::uint32_t(options.dds_domain), options.node,
+          options.dds_loopback ? hmpc::dds::loopback_config() : std::string());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: DDS: %s\n", kProgram, e.what());
+      return 1;
+    }
+  }
+
+  std::FILE* log = nullptr;
+  if (!options.log_path.empty()) {
+    log = std::fopen(options.log_path.c_str(), "w");
+    if (!log) {
+      std::fprintf(stderr, "%s: cannot write the log '%s': %s\n", kProgram,
+                   options.log_path.c_str(), std::strerror(errno));
+      return 1;
+    }
+    std::fprintf(log, "time_s,mode,strategy,faults,theta_rad,theta_d_rad,v_p_V,v_m_V,tau_p_Nm,"
+                      "tau_m_Nm,solve_status,coarse_iterations,fine_iterations,solve_time_us\n");
+  }
+
+  std::printf("%s: node %u on %s, %s%s: ready\n", kProgram, unsigned(options.node),
+              options.interface.c_str(), options.lockstep ? "lock-step" : "real time, 1 kHz",
+              dds ? ", DDS bridge up" : "");
+  std::fflush(stdout);
+
+  Host host(options, can, dds.get(), log);
+  const double start = monotonic_seconds();
+  const End end = run(options, can, host, signal_fd, error);
+  int status = 0;
+  if (end == End::kFailure) {
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
+    status = 1;
+  }
+  if (log && std::fclose(log) != 0) {
+    std::fprintf(stderr, "%s: writing the log '%s' failed\n", kProgram, options.log_path.c_str());
+    status = 1;
+  }
+  host.print_summary(monotonic_seconds() - start);
+  ::close(signal_fd);
+  return status;
+}
