@@ -315,6 +315,7 @@ int main(int argc, char** argv) {
   Board::Config config;
   config.node = options.node;
   if (options.emulate_cortex_m7) config.emulated_target = &hmpc::forearm::kCortexM7ComputeModel;
+  if (options.w_v > 0) config.weights.w_v = options.w_v;
   // Lock-step has no deadline: the simulator, not this machine, decides how long a solve takes.
   static Board board(config, options.lockstep ? nullptr : &monotonic_seconds);
   BoardLoop loop(board, config, can, log);

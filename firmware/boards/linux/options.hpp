@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "hmpc/cli/arguments.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
 namespace hmpc::linux_board {
@@ -17,6 +18,7 @@ struct Options {
   forearm_protocol::NodeId node = 0;
   bool lockstep = false;
   bool emulate_cortex_m7 = false;  // lock-step: charge solves the STM32H743's compute time
+  double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
   double duration_s = 0;  // 0: until SIGINT or SIGTERM
   std::string log_path;   // empty: no log
 };
@@ -31,7 +33,8 @@ inline void print_usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: hmpc-forearm-board [--interface IFACE] [--node N] [--lockstep]\n"
-      "                          [--emulate-target cortex-m7] [--duration SECONDS] [--log FILE]\n"
+      "                          [--emulate-target cortex-m7] [--w-v W] [--duration SECONDS]\n"
+      "                          [--log FILE]\n"
       "  --interface IFACE   SocketCAN interface, e.g. can0 or vcan0 (default: vcan0)\n"
       "  --node N            board node id on the bus, 0..15 (default: 0)\n"
       "  --lockstep          HIL lock-step: each valid Sync frame from the plant is one 1 kHz\n"
@@ -40,6 +43,8 @@ inline void print_usage(std::FILE* out) {
       "  --emulate-target cortex-m7\n"
       "                      with --lockstep: each MPC output acts after the compute time the\n"
       "                      STM32H743 board (Cortex-M7, 400 MHz) would take for that solve\n"
+      "  --w-v W             the MPC's input-voltage weight w_v of Eq. 3.3, in [1e-6, 1]\n"
+      "                      (default 0.002, the thesis's; Fig. 3.4 varies it)\n"
       "  --duration SECONDS  stop after this long (default: run until SIGINT or SIGTERM)\n"
       "  --log FILE          write mode and outputs of every tick as CSV at exit (the last\n"
       "                      %d minutes are kept in memory meanwhile)\n"
@@ -60,7 +65,7 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
       continue;
     }
     if (arg != "--interface" && arg != "--node" && arg != "--duration" && arg != "--log" &&
-        arg != "--emulate-target") {
+        arg != "--emulate-target" && arg != "--w-v") {
       error = "unknown option '" + arg + "'";
       return ParseOutcome::kError;
     }
@@ -94,6 +99,13 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
         return ParseOutcome::kError;
       }
       options.duration_s = seconds;
+    } else if (arg == "--w-v") {
+      double w = 0;
+      if (!cli::parse_number(value, 1e-6, 1, w)) {
+        error = cli::bad_value("--w-v", "a weight in [1e-6, 1]", value);
+        return ParseOutcome::kError;
+      }
+      options.w_v = w;
     } else if (arg == "--emulate-target") {
       if (value != "cortex-m7") {
         error = "--emulate-target knows only 'cortex-m7', got '" + value + "'";

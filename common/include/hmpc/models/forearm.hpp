@@ -65,6 +65,20 @@ struct Parameters {
   Scalar v_p_min = Scalar(0), v_p_max = Scalar(5);
   Scalar v_m_min = Scalar(-5), v_m_max = Scalar(5);
 
+  // Mechanical end stops of the elbow: only the HIL plant (hil/forearm) has them; Eq. 3.1 and
+  // the controllers ignore these fields. The arm rests on the lower stop when the valve is
+  // vented. They lie outside the board's software limits (-1.2, 1.6 rad, forearm_board.hpp),
+  // so a working controller never reaches them. A stiff rubber bumper (our choice): at
+  // 1e4 N·m/rad the arm's own weight compresses the lower stop by 0.04 mrad. Hunt-Crossley
+  // dissipation: the stop torque is k x (1 + d x'), x the penetration and x' its rate, never
+  // pulling, so it adds nothing at first touch and damps in proportion to impact speed. With
+  // d = 0.5 s/rad the vented arm falling from the horizontal (~10 rad/s at impact) compresses
+  // the stop by 0.012 rad and keeps ~3 % of its energy (rebounds 0.15 rad).
+  Scalar stop_lower = Scalar(-1.45);          // rad
+  Scalar stop_upper = Scalar(1.75);           // rad
+  Scalar stop_stiffness = Scalar(1e4);        // N·m/rad
+  Scalar stop_dissipation = Scalar(0.5);      // s/rad
+
   Scalar inertia() const {
     return mass * (com_distance * com_distance + gyration_radius * gyration_radius);
   }

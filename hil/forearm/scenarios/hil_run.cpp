@@ -1,0 +1,287 @@
+#include "hil_run.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "hmpc/models/forearm_problems.hpp"
+
+extern char** environ;
+
+namespace hmpc::hil {
+namespace {
+
+namespace proto = forearm_protocol;
+using Clock = std::chrono::steady_clock;
+
+// Generous limits: under QEMU without KVM the three programs run ~10x slower than natively.
+constexpr double kStartupS = 60;            // until the board and the host are listening
+constexpr double kWallPerSimulatedS = 60;   // worst case wall seconds per simulated second
+constexpr double kStopS = 30;               // for SIGTERM to end a program
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A program with its stdout and stderr in files of the run directory.
+class Child {
+ public:
+  Child() = default;
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  ~Child() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+
+  bool start(const std::string& program, const std::vector<std::string>& args,
+             const std::string& output, std::string& error) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, (output + ".err").c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(program.c_str()));
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const int rc = posix_spawn(&pid_, program.c_str(), &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    output_ = output;
+    if (rc != 0) {
+      pid_ = -1;
+      error = "cannot start " + program + ": " + std::strerror(rc);
+      return false;
+    }
+    return true;
+  }
+
+  // Waits until the program's stdout contains `text`, or it exits, or the timeout.
+  bool await_output(const std::string& text, double timeout_s) {
+    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (Clock::now() < end) {
+      if (read_file(output_).find(text) != std::string::npos) return true;
+      if (exited()) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return false;
+  }
+
+  // Waits for the exit; -1 on timeout (the program is still running).
+  int wait(double timeout_s) {
+    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (Clock::now() < end) {
+      if (exited()) return status_;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return -1;
+  }
+
+  int stop(double timeout_s) {
+    if (pid_ > 0) ::kill(pid_, SIGTERM);
+    return wait(timeout_s);
+  }
+
+  std::string output() const { return read_file(output_); }
+  std::string errors() const { return read_file(output_ + ".err"); }
+
+ private:
+  bool exited() {
+    if (pid_ <= 0) return true;
+    int status = 0;
+    if (::waitpid(pid_, &status, WNOHANG) != pid_) return false;
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    pid_ = -1;
+    return true;
+  }
+
+  pid_t pid_ = -1;
+  int status_ = -1;
+  std::string output_;
+};
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+struct PlantRow {
+  double time, theta, theta_dot, pressure_bar, v_p, v_m, tau_p, tau_m;
+};
+
+bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::string& error) {
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line)) {
+    error = "plant log " + path + " is empty";
+    return false;
+  }
+  while (std::getline(in, line)) {
+    PlantRow r{};
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &r.time, &r.theta,
+                    &r.theta_dot, &r.pressure_bar, &r.v_p, &r.v_m, &r.tau_p, &r.tau_m) != 8) {
+      error = "plant log " + path + ": malformed row '" + line + "'";
+      return false;
+    }
+    rows.push_back(r);
+  }
+  return true;
+}
+
+std::string strategy_name(proto::Strategy s) {
+  return proto::value_name(proto::kStrategyValues, std::uint32_t(s));
+}
+
+}  // namespace
+
+std::map<std::string, std::string> parse_summary(const std::string& text) {
+  std::map<std::string, std::string> out;
+  const std::size_t at = text.rfind(": summary ");
+  if (at == std::string::npos) return out;
+  std::istringstream words(text.substr(at + 10, text.find('\n', at) - at - 10));
+  std::string word;
+  while (words >> word) {
+    const std::size_t eq = word.find('=');
+    if (eq != std::string::npos) out[word.substr(0, eq)] = word.substr(eq + 1);
+  }
+  return out;
+}
+
+double HilRunResult::number(const std::map<std::string, std::string>& summary,
+                            const std::string& key) const {
+  const auto it = summary.find(key);
+  return it == summary.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
+}
+
+HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
+  HilRunResult result;
+  std::error_code ec;
+  std::filesystem::create_directories(spec.directory, ec);
+  if (ec) {
+    result.error = "cannot create " + spec.directory + ": " + ec.message();
+    return result;
+  }
+  const std::string dir = spec.directory + "/";
+  const double duration = spec.run_at_s + spec.run_for_s + spec.settle_s;
+
+  std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7"};
+  if (spec.w_v > 0) {
+    board_args.push_back("--w-v");
+    board_args.push_back(number_text(spec.w_v));
+  }
+  std::vector<std::string> host_args{
+      "--lockstep", "--run", strategy_name(spec.strategy), "--frequency",
+      number_text(spec.frequency_hz), "--amplitude-deg", number_text(spec.amplitude_rad * 180 / M_PI),
+      "--run-at", number_text(spec.run_at_s), "--run-for", number_text(spec.run_for_s),
+      "--log", dir + "host.csv"};
+  host_args.insert(host_args.end(), spec.host_args.begin(), spec.host_args.end());
+  std::vector<std::string> plant_args{
+      "--lockstep", "--wait-host", "--duration", number_text(duration), "--noise",
+      number_text(spec.noise_scale), "--seed", std::to_string(spec.seed), "--mass-scale",
+      number_text(spec.mismatch.mass_scale), "--friction-scale",
+      number_text(spec.mismatch.friction_scale), "--pam-time-scale",
+      number_text(spec.mismatch.pam_time_constant_scale), "--log", dir + "plant.csv"};
+  plant_args.insert(plant_args.end(), spec.plant_args.begin(), spec.plant_args.end());
+
+  Child board, host, plant;
+  if (!board.start(programs.board, board_args, dir + "board.out", result.error) ||
+      !host.start(programs.host, host_args, dir + "host.out", result.error)) {
+    return result;
+  }
+  if (!board.await_output(": ready", kStartupS) || !host.await_output(": ready", kStartupS)) {
+    result.error = "board or host did not start: " + board.errors() + host.errors();
+    return result;
+  }
+  if (!plant.start(programs.plant, plant_args, dir + "plant.out", result.error)) return result;
+  const int plant_status = plant.wait(kStartupS + kWallPerSimulatedS * duration);
+  const int host_status = host.stop(kStopS);
+  const int board_status = board.stop(kStopS);
+  result.board = parse_summary(board.output());
+  result.plant = parse_summary(plant.output());
+  result.host = parse_summary(host.output());
+  if (plant_status != 0 || host_status != 0 || board_status != 0) {
+    result.error = "exit status plant " + std::to_string(plant_status) + ", host " +
+                   std::to_string(host_status) + ", board " + std::to_string(board_status) +
+                   " (-1: timed out); plant said: " + plant.errors() + " host said: " +
+                   host.errors() + " board said: " + board.errors();
+    return result;
+  }
+
+  std::vector<PlantRow> rows;
+  if (!read_plant_log(dir + "plant.csv", rows, result.error)) return result;
+  const double t0 = result.number(result.host, "run_start_s");
+  if (!(t0 >= 0)) {
+    result.error = "the host never started the run (run_start_s missing)";
+    return result;
+  }
+  forearm::CostWeights<double> weights;
+  if (spec.w_v > 0) weights.w_v = spec.w_v;
+  const forearm::Parameters<double> model;
+  const long first = std::lround(t0 * 1e3), periods = std::lround(spec.run_for_s / 0.004);
+  int counted = 0;
+  double squared_error = 0;
+  result.theta_min = 1e9;
+  result.theta_max = -1e9;
+  for (const PlantRow& r : rows) {
+    result.theta_min = std::min(result.theta_min, r.theta);
+    result.theta_max = std::max(result.theta_max, r.theta);
+  }
+  // Row i holds the state at (i + 1) ms and the input applied during the millisecond before.
+  for (long j = 0; j < periods; ++j) {
+    const long ms = first + 4 * j;
+    if (ms < 1 || ms >= long(rows.size())) break;
+    const PlantRow& x = rows[std::size_t(ms - 1)];
+    const PlantRow& u = rows[std::size_t(ms)];  // applied from ms to ms + 1
+    const double t = 1e-3 * double(ms);
+    const double theta_d = spec.amplitude_rad * std::sin(2 * M_PI * spec.frequency_hz * (t - t0));
+    result.accumulated_cost +=
+        forearm::tracking_cost(model, weights, x.theta, theta_d, x.pressure_bar, u.v_m, true).value +
+        weights.w_v * (u.v_m * u.v_m + u.v_p * u.v_p);
+    squared_error += (x.theta - theta_d) * (x.theta - theta_d);
+    ++counted;
+  }
+  if (counted < periods) {
+    result.error = "the plant log covers " + std::to_string(counted) + " of " +
+                   std::to_string(periods) + " control periods of the run";
+    return result;
+  }
+  long torque_rows = 0;
+  for (long ms = first; ms < first + 4 * periods && ms < long(rows.size()); ++ms, ++torque_rows) {
+    result.mean_abs_pam_torque += std::abs(rows[std::size_t(ms)].tau_p);
+    result.mean_abs_motor_torque += std::abs(rows[std::size_t(ms)].tau_m);
+  }
+  result.mean_abs_pam_torque /= double(torque_rows);
+  result.mean_abs_motor_torque /= double(torque_rows);
+  result.rms_error = std::sqrt(squared_error / counted);
+  result.solve_time_max_us = result.number(result.host, "solve_time_max_us");
+  result.solve_time_median_us = result.number(result.host, "solve_time_median_us");
+  result.deadline_misses = result.number(result.board, "mpc_overruns");
+  result.within_stops = result.number(result.plant, "within_stops") == 1;
+  result.ok = true;
+  return result;
+}
+
+HilPrograms HilPrograms::built() {
+  return {HMPC_FOREARM_BOARD_PROGRAM, HMPC_FOREARM_PLANT_PROGRAM, HMPC_FOREARM_HOST_PROGRAM};
+}
+
+}  // namespace hmpc::hil

@@ -1,0 +1,66 @@
+// One forearm HIL run over CAN (issue 4): the three programs a lab would run, as separate
+// processes on one SocketCAN interface (vcan0 through hil/vcan/run-with-vcan.sh) in lock-step:
+//   hmpc-forearm-board  --lockstep --emulate-target cortex-m7   (the firmware, Linux build)
+//   hmpc-forearm-host   --lockstep --run STRATEGY ...            (CAN master, target stream)
+//   hmpc-forearm-plant  --lockstep --wait-host ...               (Simbody forearm)
+// and the figures of the run from their logs and summaries: accumulated cost (Eq. 3.3a per
+// 4 ms control period, as forearm::simulate_tracking counts it), RMS tracking error, solve
+// times charged by the emulated Cortex-M7, deadline misses and the torque shares.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hmpc/models/forearm.hpp"
+#include "hmpc/protocol/forearm_protocol.hpp"
+#include "simbody_forearm.hpp"
+
+namespace hmpc::hil {
+
+struct HilPrograms {
+  std::string board, plant, host;  // executables
+  // The build's own programs (compiled-in paths).
+  static HilPrograms built();
+};
+
+struct HilRunSpec {
+  forearm_protocol::Strategy strategy = forearm_protocol::Strategy::kTwoStage;
+  double frequency_hz = 1.0;
+  double amplitude_rad = 30 * 3.14159265358979323846 / 180;  // thesis Sec. 3.3: +-30 deg
+  double run_for_s = 10;          // thesis Sec. 3.4: 10-s trials
+  double run_at_s = 0.3;          // idle, then hold, then run from here (host's script)
+  double settle_s = 0.1;          // plant keeps stepping after the run (board back in hold)
+  double noise_scale = 0;         // plant sensor noise (plant_node/options.hpp SensorNoise)
+  std::uint64_t seed = 1;
+  ForearmMismatch mismatch{};
+  double w_v = 0;                 // board's voltage weight of Eq. 3.3; 0: the thesis's default
+  std::vector<std::string> plant_args, host_args;  // extra options, e.g. fault injection
+  std::string directory;          // where logs and program outputs go (created)
+};
+
+struct HilRunResult {
+  bool ok = false;
+  std::string error;  // why not ok: a program failed, timed out, or a log was unreadable
+  double accumulated_cost = 0;  // Eq. 3.3a over the run, per control period
+  double rms_error = 0;         // rad, theta - theta_d over the run
+  double solve_time_max_us = 0, solve_time_median_us = 0;  // charged Cortex-M7 time
+  double deadline_misses = 0;   // MPC steps charged over the board's 3.5 ms budget
+  double mean_abs_pam_torque = 0, mean_abs_motor_torque = 0;  // N·m over the run
+  double theta_min = 0, theta_max = 0;  // over the whole plant log
+  bool within_stops = false;
+  // key=value summaries the programs printed at exit.
+  std::map<std::string, std::string> board, plant, host;
+  double motor_share() const {
+    return mean_abs_motor_torque / (mean_abs_pam_torque + mean_abs_motor_torque);
+  }
+  double number(const std::map<std::string, std::string>& summary, const std::string& key) const;
+};
+
+HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs);
+
+// "prog: summary k=v k=v ..." -> {k: v}; the last summary line of `text` counts.
+std::map<std::string, std::string> parse_summary(const std::string& text);
+
+}  // namespace hmpc::hil
