@@ -60,7 +60,7 @@ std::vector<dds::ForearmCommandSample> poll_while(dds::ForearmDdsBridge& bridge,
 TEST(ForearmCli, RunCommandReachesTheBridge) {
   dds::ForearmDdsBridge bridge(95, 1, dds::loopback_config());
   auto cli = std::async(std::launch::async, [] {
-    return run_cli("--domain 95 --node 1 --timeout 30 run --strategy coarse20 --sine 20 0.5 "
+    return run_cli("--domain 95 --node 1 --timeout 30 run --strategy coarse_20ms --sine 20 0.5 "
                    "--offset 10 --duration 12 --sequence 42");
   });
   const std::vector<dds::ForearmCommandSample> accepted = poll_while(bridge, cli, 1);

@@ -1,121 +1,23 @@
 #include "hil_run.hpp"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <thread>
 
+#include "child_process.hpp"
 #include "hmpc/models/forearm_problems.hpp"
-
-extern char** environ;
 
 namespace hmpc::hil {
 namespace {
 
 namespace proto = forearm_protocol;
-using Clock = std::chrono::steady_clock;
-
 // Generous limits: under QEMU without KVM the three programs run ~10x slower than natively.
 constexpr double kStartupS = 60;            // until the board and the host are listening
 constexpr double kWallPerSimulatedS = 60;   // worst case wall seconds per simulated second
 constexpr double kStopS = 30;               // for SIGTERM to end a program
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// A program with its stdout and stderr in files of the run directory.
-class Child {
- public:
-  Child() = default;
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  ~Child() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-
-  bool start(const std::string& program, const std::vector<std::string>& args,
-             const std::string& output, std::string& error) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, (output + ".err").c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> argv;
-    argv.push_back(const_cast<char*>(program.c_str()));
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, program.c_str(), &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    output_ = output;
-    if (rc != 0) {
-      pid_ = -1;
-      error = "cannot start " + program + ": " + std::strerror(rc);
-      return false;
-    }
-    return true;
-  }
-
-  // Waits until the program's stdout contains `text`, or it exits, or the timeout.
-  bool await_output(const std::string& text, double timeout_s) {
-    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Clock::now() < end) {
-      if (read_file(output_).find(text) != std::string::npos) return true;
-      if (exited()) return false;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return false;
-  }
-
-  // Waits for the exit; -1 on timeout (the program is still running).
-  int wait(double timeout_s) {
-    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Clock::now() < end) {
-      if (exited()) return status_;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return -1;
-  }
-
-  int stop(double timeout_s) {
-    if (pid_ > 0) ::kill(pid_, SIGTERM);
-    return wait(timeout_s);
-  }
-
-  std::string output() const { return read_file(output_); }
-  std::string errors() const { return read_file(output_ + ".err"); }
-
- private:
-  bool exited() {
-    if (pid_ <= 0) return true;
-    int status = 0;
-    if (::waitpid(pid_, &status, WNOHANG) != pid_) return false;
-    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    pid_ = -1;
-    return true;
-  }
-
-  pid_t pid_ = -1;
-  int status_ = -1;
-  std::string output_;
-};
 
 std::string number_text(double v) {
   std::ostringstream s;

@@ -33,7 +33,8 @@ void usage(std::FILE* out) {
       "  idle              safe outputs\n"
       "  watch             print the node's state and telemetry as they arrive\n"
       "command options (run, hold, idle):\n"
-      "  --strategy NAME   fine4, fine8, coarse20, coarse40, two-stage (default), pam-only\n"
+      "  --strategy NAME   fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, two_stage (default),\n"
+      "                    pam_only\n"
       "  --sine AMP_DEG FREQ_HZ  sinusoidal target of this amplitude and frequency\n"
       "  --offset DEG      target offset (alone: a constant target); default: hold the\n"
       "                    current angle\n"
@@ -51,7 +52,7 @@ struct Options {
   bool loopback = false;
   double timeout_s = 10;
   std::string command;
-  std::string strategy = "two-stage";
+  std::string strategy = "two_stage";
   bool sine = false;
   double amplitude_deg = 0;
   double frequency_hz = 0;
@@ -114,26 +115,17 @@ double positive_seconds(const std::string& option, const std::string& text) {
   return value;
 }
 
-struct StrategyName {
-  const char* name;
-  proto::Strategy strategy;
-};
-constexpr StrategyName kStrategyNames[] = {
-    {"fine4", proto::Strategy::kFine4ms},       {"fine8", proto::Strategy::kFine8ms},
-    {"coarse20", proto::Strategy::kCoarse20ms}, {"coarse40", proto::Strategy::kCoarse40ms},
-    {"two-stage", proto::Strategy::kTwoStage},  {"pam-only", proto::Strategy::kPamOnly},
-};
-
 // A name, or with --raw-sample any code 0..255 (to send an invalid one on purpose).
 proto::Strategy strategy_of(const Options& o) {
-  for (const StrategyName& s : kStrategyNames) {
-    if (o.strategy == s.name) return s.strategy;
+  // The protocol's names (its DBC value table), as every program uses them.
+  for (const proto::EnumValue& s : proto::kStrategyValues) {
+    if (o.strategy == s.name) return static_cast<proto::Strategy>(s.value);
   }
   if (o.raw_sample) {
     return static_cast<proto::Strategy>(integer("--strategy", o.strategy, 0, 255));
   }
-  throw ArgumentError{"--strategy must be one of fine4, fine8, coarse20, coarse40, two-stage, "
-                      "pam-only, got '" + o.strategy + "'"};
+  throw ArgumentError{"--strategy must be one of fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, "
+                      "two_stage, pam_only, got '" + o.strategy + "'"};
 }
 
 Options parse(int argc, char** argv) {
