@@ -17,6 +17,15 @@ const ContactState& StepMap::evaluate_contact(const State& x) {
 }
 
 State StepMap::step(const State& x, const JointVector& tau, double dt, const Velocity& external) {
+  return advance(x, tau, dt, external, false);
+}
+
+State StepMap::step_legs(const State& x, const JointVector& tau, double dt) {
+  return advance(x, tau, dt, Velocity::Zero(), true);
+}
+
+State StepMap::advance(const State& x, const JointVector& tau, double dt, const Velocity& external,
+                       bool base_held) {
   const int substeps = std::max(1, static_cast<int>(std::ceil(dt / max_substep_ - 1e-9)));
   const double nominal = dt / substeps;
   State next = x;
@@ -29,13 +38,14 @@ State StepMap::step(const State& x, const JointVector& tau, double dt, const Vel
     if (rate * h > kMaxRotation) h = std::max(kMaxRotation / rate, nominal / kMaxRefinement);
     // Finish dt exactly, without leaving a sliver for a last, tiny sub-step.
     if (remaining < 1.5 * h) h = remaining;
-    substep(next, tau, h, external);
+    substep(next, tau, h, external, base_held);
     remaining -= h;
   }
   return next;
 }
 
-void StepMap::substep(State& x, const JointVector& tau, double h, const Velocity& external) {
+void StepMap::substep(State& x, const JointVector& tau, double h, const Velocity& external,
+                      bool base_held) {
   const ContactState& contact = evaluate_contact(x);
   // (S1). bias_forces and mass_matrix both refresh the dynamics' transforms from q.
   Velocity rhs = external - dynamics_.bias_forces(x.q, x.v) + ContactModel::generalized_force(contact);
@@ -44,6 +54,12 @@ void StepMap::substep(State& x, const JointVector& tau, double h, const Velocity
   for (int i = 0; i < contact.count; ++i) {
     iteration_matrix_.noalias() -=
         h * contact.jacobian[i].transpose() * contact.force_velocity[i] * contact.jacobian[i];
+  }
+  if (base_held) {
+    leg_cholesky_.compute(iteration_matrix_.bottomRightCorner<kJoints, kJoints>());
+    x.v.tail<kJoints>() += h * leg_cholesky_.solve(rhs.tail<kJoints>());
+    x.q.tail<kJoints>() += h * x.v.tail<kJoints>();
+    return;
   }
   cholesky_.compute(iteration_matrix_);
   x.v += h * cholesky_.solve(rhs);

@@ -367,9 +367,12 @@ class Ilqr {
 
   bool compute_derivatives(const Problem& problem) {
     work_.derivative_steps += N;
-    for (int t = 0; t < N; ++t) {
+    // The steps are independent: the problem decides where they run (problem.hpp).
+    problem.for_each_step(N, [&](int t) {
       problem.dynamics_derivatives(x_[t], u_[t], t, fx_[t], fu_[t]);
       problem.running_cost_derivatives(x_[t], u_[t], t, running_[t]);
+    });
+    for (int t = 0; t < N; ++t) {
       if (!fx_[t].allFinite() || !fu_[t].allFinite() || !running_[t].lx.allFinite() ||
           !running_[t].lu.allFinite() || !running_[t].lxx.allFinite() ||
           !running_[t].luu.allFinite() || !running_[t].lux.allFinite())

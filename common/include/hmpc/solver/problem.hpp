@@ -7,7 +7,11 @@
 //   Scalar terminal_cost(const State& x, int t) const;                   // l_T(x), Eq. 2.2
 // and may define, by hiding the defaults below,
 //   dynamics_derivatives, running_cost_derivatives, terminal_cost_derivatives (analytic),
-//   control_lower_bound(t), control_upper_bound(t) (box limits at step t; default: none).
+//   control_lower_bound(t), control_upper_bound(t) (box limits at step t; default: none),
+//   for_each_step(count, linearize) (how the solver's N independent per-step linearisations
+//   run; default: in order on the calling thread. A host problem may spread them over
+//   threads: each call linearize(t) writes only step t's outputs, and the problem's
+//   derivative functions must then be safe to call concurrently for different t).
 // The defaults differentiate numerically, so a model supplies either analytic or
 // finite-difference derivatives simply by defining a function or not.
 #pragma once
@@ -82,6 +86,11 @@ class ProblemBase {
     const Derived& self = derived();
     central_difference_gradient_hessian([&](const State& xp) { return self.terminal_cost(xp, t); },
                                         x, d.lx, d.lxx);
+  }
+
+  template <class StepFunction>
+  void for_each_step(int count, const StepFunction& linearize) const {
+    for (int t = 0; t < count; ++t) linearize(t);
   }
 
   Control control_lower_bound(int) const {

@@ -58,6 +58,13 @@ class StepMap {
   State step(const State& x, const JointVector& tau, double dt,
              const Velocity& external = Velocity::Zero());
 
+  // The fast subsystem's step (Eqs. 2.50-2.51, fast_subsystem.hpp): the base held, pose and
+  // velocity (Eq. 2.28: the slow variables are constant on the fast time scale), and the
+  // legs moved by the leg rows of (S1) with the base acceleration zero,
+  //   (M22 - h sum_i J_i,leg^T D_i J_i,leg) dv_leg = h (tau - c_leg + (sum_i J_i^T f_i)_leg),
+  // M22 = epsilon Q22 of Eq. 2.50b. Same sub-steps as step().
+  State step_legs(const State& x, const JointVector& tau, double dt);
+
   // The contact state last evaluated (forces, points, Jacobians): at the start of the last
   // sub-step, or by evaluate_contact().
   const ContactState& contact_state() const { return contact_state_; }
@@ -69,7 +76,10 @@ class StepMap {
   double max_substep() const { return max_substep_; }
 
  private:
-  void substep(State& x, const JointVector& tau, double h, const Velocity& external);
+  State advance(const State& x, const JointVector& tau, double dt, const Velocity& external,
+                bool base_held);
+  void substep(State& x, const JointVector& tau, double h, const Velocity& external,
+               bool base_held);
 
   Dynamics dynamics_;
   ContactModel contact_;
@@ -79,6 +89,7 @@ class StepMap {
   ContactState contact_state_;
   MassMatrix iteration_matrix_;
   Eigen::LLT<MassMatrix> cholesky_;
+  Eigen::LLT<Eigen::Matrix<double, kJoints, kJoints>> leg_cholesky_;
 };
 
 }  // namespace hmpc::humanoid

@@ -1,0 +1,139 @@
+// The humanoid's fast subsystem for the lower layer of the Coarse-Fast MPC (thesis Sec. 2.5.2,
+// Eqs. 2.42-2.51; two_layer_mpc.hpp's FastSubsystem interface).
+//
+// Split (Eq. 2.47): slow y = the base, (q_base, v_base) = (position, quaternion; spatial
+// velocity), 13 numbers; fast z = the legs, (q_leg, v_leg), n_f = 16 (Sec. 2.6.2). The inertia
+// matrix splits as M = M_base + M_leg (Eq. 2.42), M_base = [M11 0; 0 0] with M11 the base's
+// 6x6 block (linear and angular, the thesis's "latter assumption"), and
+// epsilon = ||M_leg|| / ||M_base|| (Eq. 2.43; Frobenius norms, the thesis names none).
+//
+// With the slow variables frozen (Eq. 2.50a, and Eq. 2.28: y constant on the fast time
+// scale) the deviation zeta = z - z_hat* of Eq. 2.48 obeys Eq. 2.50b,
+//   epsilon Q22 zeta_v' = p_z,   epsilon Q22 = M22 (Q = M_leg / epsilon, Eq. 2.43),
+// p_z the leg rows of the thesis's c + u (Eq. 2.49): joint torques, minus our bias forces,
+// plus the contact forces. epsilon cancels, so the step is StepMap::step_legs: the leg rows
+// of the model with the base held, discretised like the full model (Eq. 2.51c with the step
+// map's sub-steps in place of one Euler step; z_hat* is piecewise constant, so zeta_v' = v_leg').
+//
+// As in the two-layer MPC's contract, the reference (y_hat*, z_hat*, u_hat*) is the upper
+// plan held on the fine grid (Eq. 2.35); zeta is re-referenced where z_hat* steps, so the
+// underlying z evolves continuously. Cost: Eq. 2.52, w_fast zeta' zeta, plus the control cost
+// w_fast_control nu' nu on the input deviation nu (Sec. 2.6.1: "the quadratic penalty on the
+// deviation of control inputs as with the state-cost"). The composed input u_hat* + nu
+// (Eq. 2.36) stays within the torque limits.
+#pragma once
+
+#include <array>
+
+#include "hmpc/humanoid/problem.hpp"
+
+namespace hmpc::humanoid {
+
+constexpr int kFastStateSize = 2 * kJoints;  // n_f = 16
+using FastState = Eigen::Matrix<double, kFastStateSize, 1>;
+
+// z of Eq. 2.47 from x = (q, v), and x with its z replaced.
+inline FastState fast_part(const StateVector& x) {
+  FastState z;
+  z << x.segment<kJoints>(7), x.tail<kJoints>();
+  return z;
+}
+inline StateVector with_fast_part(StateVector x, const FastState& z) {
+  x.segment<kJoints>(7) = z.head<kJoints>();
+  x.tail<kJoints>() = z.tail<kJoints>();
+  return x;
+}
+
+// epsilon = ||M_leg||_F / ||M_base||_F, Eqs. 2.42-2.43.
+double perturbation_parameter(const MassMatrix& M);
+
+template <int NFast>
+class FastSubsystem
+    : public ProblemBase<FastSubsystem<NFast>, double, kFastStateSize, kJoints> {
+  using Base = ProblemBase<FastSubsystem<NFast>, double, kFastStateSize, kJoints>;
+
+ public:
+  using typename Base::Control;
+  using typename Base::ControlJacobian;
+  using typename Base::RunningDerivatives;
+  using typename Base::State;
+  using typename Base::StateJacobian;
+  using typename Base::TerminalDerivatives;
+  using FullState = StateVector;
+  using FullControl = JointVector;
+
+  // config.step is Delta t_f. `pool` (may be null: serial) must outlive the problem.
+  FastSubsystem(const CostWeights& weights, const ProblemConfig& config,
+                ThreadPool* pool = nullptr)
+      : weights_(weights), config_(config), pool_(pool) {
+    const Model model(config.parameters);
+    step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
+    limit_ = model.torque_limit;
+    // A valid reference (identity attitude, at rest) until the MPC sets the upper plan.
+    for (auto& x : x_hat_) {
+      x.setZero();
+      x[3] = 1.0;
+    }
+    for (auto& u : u_hat_) u.setZero();
+  }
+
+  const ProblemConfig& config() const { return config_; }
+
+  void set_reference(int j, const FullState& x_hat, const FullControl& u_hat) {
+    x_hat_[j] = x_hat;
+    u_hat_[j] = u_hat;
+  }
+  State deviation(const FullState& x) const { return fast_part(x) - fast_part(x_hat_[0]); }
+  FullControl compose(const FullControl& u_hat, const Control& nu) const { return u_hat + nu; }
+  // The full state the lower layer predicts at fine step j: (y_hat_j, z_hat_j + zeta).
+  FullState full_state(const State& zeta, int j) const {
+    return with_fast_part(x_hat_[j], fast_part(x_hat_[j]) + zeta);
+  }
+
+  // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j.
+  State dynamics(const State& zeta, const Control& nu, int j) const {
+    const humanoid::State next =
+        step_maps_[j].step_legs(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
+    return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
+  }
+
+  double running_cost(const State& zeta, const Control& nu, int) const {
+    return weights_.fast * zeta.squaredNorm() + weights_.fast_control * nu.squaredNorm();
+  }
+  double terminal_cost(const State& zeta, int) const { return weights_.fast * zeta.squaredNorm(); }
+  void running_cost_derivatives(const State& zeta, const Control& nu, int,
+                                RunningDerivatives& d) const {
+    d.lx = 2.0 * weights_.fast * zeta;
+    d.lu = 2.0 * weights_.fast_control * nu;
+    d.lxx = 2.0 * weights_.fast * StateJacobian::Identity();
+    d.luu = 2.0 * weights_.fast_control * Eigen::Matrix<double, kJoints, kJoints>::Identity();
+    d.lux.setZero();
+  }
+  void terminal_cost_derivatives(const State& zeta, int, TerminalDerivatives& d) const {
+    d.lx = 2.0 * weights_.fast * zeta;
+    d.lxx = 2.0 * weights_.fast * StateJacobian::Identity();
+  }
+
+  template <class StepFunction>
+  void for_each_step(int count, const StepFunction& linearize) const {
+    if (pool_ != nullptr) {
+      pool_->for_each(count, linearize);
+    } else {
+      Base::for_each_step(count, linearize);
+    }
+  }
+
+  Control control_lower_bound(int j) const { return -limit_ - u_hat_[j]; }
+  Control control_upper_bound(int j) const { return limit_ - u_hat_[j]; }
+
+ private:
+  CostWeights weights_;
+  ProblemConfig config_;
+  ThreadPool* pool_;
+  JointVector limit_;
+  std::array<FullState, NFast + 1> x_hat_;
+  std::array<FullControl, NFast + 1> u_hat_;
+  mutable std::array<StepMap, NFast> step_maps_;  // one workspace per step, as in problem.hpp
+};
+
+}  // namespace hmpc::humanoid

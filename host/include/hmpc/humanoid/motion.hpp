@@ -1,0 +1,88 @@
+// A humanoid motion: the cost weights of thesis Sec. 4.3.1 (Eqs. 4.24-4.30) and Eq. 2.52, and
+// the phase schedule of the base targets (attitude a, height p_z, velocity v) of Tables
+// 2.2-2.3, read from a motion file (host/humanoid/motions/*.motion).
+//
+// File format (UTF-8 text, one setting per line):
+//   - '#' starts a comment; blank lines are ignored.
+//   - The first other line is the version line, exactly `hmpc-humanoid-motion 1`.
+//   - `[motion]`, `[weights]` and `[phase]` start sections; `[phase]` may repeat, once per
+//     phase, in order of start time. Other lines are `key = value`.
+//   - Values are numbers; vectors are numbers separated by spaces. A number may end in `pi`
+//     (`1.5pi`, `-pi`, `pi`) to mean that multiple of pi.
+//   [motion]   duration  simulated length [s] (> 0)
+//              chair     `none`, or the chair's seat (motion IV): height, then the x range
+//                        from x_min to x_max (world) [m]
+//   [weights]  w_HAA w_HFE w_KFE w_AFE   W_control of Eq. 4.24, per joint of each leg
+//              w_q1 w_q2 w_q3 w_q4       W_attitude of Eq. 4.25 (vector part, scalar part)
+//              w_height                  Eq. 4.26
+//              w_vx w_vy w_vz            W_velocity of Eq. 4.27
+//              w_alpha w_beta            Eqs. 4.28, 4.29
+//              w_omega_x w_omega_y w_omega_z   W_omega of Eq. 4.30
+//              w_fast w_fast_control     lower layer: Eq. 2.52 and its control cost
+//   [phase]    start     phase start time [s]; the first phase starts at 0, later ones
+//                        strictly later than the one before
+//              attitude  roll phi, pitch theta, yaw xi [rad]
+//              height    p_z [m]
+//              velocity  v_x v_y v_z [m/s]
+// Every key is required exactly once per section; weights are finite and >= 0. Any error
+// throws MotionFileError naming the file, the line and the key.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+
+namespace hmpc::humanoid {
+
+struct CostWeights {
+  std::array<double, 4> control{};  // w_HAA, w_HFE, w_KFE, w_AFE (Eq. 4.32)
+  Eigen::Vector4d attitude = Eigen::Vector4d::Zero();  // w_q1, w_q2, w_q3 (vector), w_q4
+  double height = 0.0;
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // w_vx, w_vy, w_vz
+  double alpha = 0.0, beta = 0.0;
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // w_omega_x, _y, _z
+  double fast = 0.0, fast_control = 0.0;  // Eq. 2.52 and the deviation nu's weight
+};
+
+struct Phase {
+  double start = 0.0;                                   // [s]
+  Eigen::Vector3d attitude = Eigen::Vector3d::Zero();   // roll, pitch, yaw [rad]
+  double height = 0.0;                                  // [m]
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   // [m/s]
+};
+
+// Fixed capacity, so a problem holds its motion by value without allocating: Table 2.3's
+// longest schedule (VIII) has six phases.
+constexpr int kMaxPhases = 8;
+
+struct Motion {
+  double duration = 0.0;
+  bool chair = false;
+  double seat_height = 0.0, seat_x_min = 0.0, seat_x_max = 0.0;  // [m], when `chair`
+  CostWeights weights;
+  std::array<Phase, kMaxPhases> phases{};
+  int phase_count = 0;
+
+  // The phase in force at time t (the last one started at or before t; the first before 0).
+  const Phase& phase_at(double t) const;
+};
+
+class MotionFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Reads a motion file; `source` names it in error messages.
+Motion parse_motion(std::istream& in, const std::string& source);
+Motion load_motion(const std::string& path);
+
+// Unit quaternion (w, x, y, z) of the attitude a = (roll phi, pitch theta, yaw xi), rotations
+// counterclockwise about x, y, z (Sec. 2.6.1) composed as R = R_z(xi) R_y(theta) R_x(phi).
+// From half angles, without folding angles into (-pi, pi]: a = (0, 2 pi, 0) gives
+// (-1, 0, 0, 0), the quaternion a body reaches after one full flip, which is how Eq. 4.25
+// tells motion VIII's flips apart (the quaternion has period 4 pi).
+Eigen::Vector4d attitude_quaternion(const Eigen::Vector3d& attitude);
+
+}  // namespace hmpc::humanoid

@@ -1,0 +1,168 @@
+#include "hmpc/humanoid/problem.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "hmpc/solver/finite_difference.hpp"
+
+namespace hmpc::humanoid {
+namespace {
+
+// Angle of the torso-frame vector d (pointing down the leg) from the torso's -z axis towards
+// its `axis` (0: x, sagittal plane; 1: y, frontal plane).
+double leg_angle(const Vector3& d, int axis) { return std::atan2(d[axis], -d.z()); }
+
+}  // namespace
+
+StateCost::StateCost(const Motion& motion, const State& initial, const ProblemConfig& config)
+    : motion_(motion), base_point_(config.base_point), dynamics_(Model(config.parameters)) {
+  const BaseFeatures f = features(initial);
+  beta_left_init_ = f.beta_left;
+  beta_right_init_ = f.beta_right;
+}
+
+BaseFeatures StateCost::features(const State& x) const {
+  Kinematics kin;
+  dynamics_.kinematics(x.q, x.v, kin);
+  const Matrix3& R = kin.rotation[0];
+  BaseFeatures f;
+  f.quaternion = x.q.segment<4>(3).normalized();
+  f.position = kin.position[0] + R * base_point_;
+  const Vector3 omega = x.v.head<3>();
+  f.velocity = R * (x.v.segment<3>(3) + omega.cross(base_point_));
+  f.angular_velocity = R * omega;
+  const auto ankle = [&](int leg) {
+    return Vector3(R.transpose() * (kin.position[Model::body_of(leg, kAnkle)] - f.position));
+  };
+  const Vector3 left = ankle(0), right = ankle(1);
+  f.alpha_left = -leg_angle(left, 0);  // positive backward (see problem.hpp)
+  f.alpha_right = leg_angle(right, 0);
+  f.beta_left = leg_angle(left, 1);
+  f.beta_right = leg_angle(right, 1);
+  return f;
+}
+
+CostResidual StateCost::residual(const StateVector& x, double time) const {
+  const BaseFeatures f = features(to_state(x));
+  const Phase& target = motion_.phase_at(time);
+  const CostWeights& w = motion_.weights;
+  CostResidual r;
+  // Eq. 4.25; W_attitude = diag(w_q1, w_q2, w_q3, w_q4) on (x, y, z; w).
+  const Eigen::Vector4d dq = f.quaternion - attitude_quaternion(target.attitude);
+  r.segment<3>(0) = w.attitude.head<3>().cwiseSqrt().cwiseProduct(dq.tail<3>());
+  r[3] = std::sqrt(w.attitude[3]) * dq[0];
+  r[4] = std::sqrt(w.height) * (f.position.z() - target.height);                       // Eq. 4.26
+  r.segment<3>(5) = w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity);  // Eq. 4.27
+  r[8] = std::sqrt(w.alpha) * (f.alpha_right - f.alpha_left);                           // Eq. 4.28
+  r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);                         // Eq. 4.29
+  r[10] = std::sqrt(w.beta) * (f.beta_left - beta_left_init_);
+  r.segment<3>(11) = w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);   // Eq. 4.30
+  return r;
+}
+
+void StateCost::derivatives(const StateVector& x, double time, StateVector& lx,
+                            StateMatrix& lxx) const {
+  Eigen::Matrix<double, kCostResiduals, kStateSize> J;
+  central_difference_jacobian([&](const StateVector& xp) { return residual(xp, time); }, x, J);
+  const CostResidual r = residual(x, time);
+  lx.noalias() = 2.0 * J.transpose() * r;
+  lxx.noalias() = 2.0 * J.transpose() * J;
+}
+
+JointVector StateCost::control_weights() const {
+  JointVector w;
+  for (int leg = 0; leg < 2; ++leg)
+    for (int j = 0; j < kJointsPerLeg; ++j) w[leg * kJointsPerLeg + j] = motion_.weights.control[j];
+  return w;
+}
+
+double StateCost::control_cost(const JointVector& tau) const {
+  return tau.cwiseAbs2().dot(control_weights());
+}
+
+ContactParameters contact_for(const Motion& motion, ContactParameters contact) {
+  contact.chair = motion.chair;
+  if (motion.chair) {
+    contact.seat_height = motion.seat_height;
+    contact.seat_x_min = motion.seat_x_min;
+    contact.seat_x_max = motion.seat_x_max;
+  }
+  return contact;
+}
+
+State standing_state(const ProblemConfig& config, double height) {
+  const Model model(config.parameters);
+  const ContactModel contact(model, config.parameters, config.contact);
+  const Dynamics dynamics(model);
+  const double sink =
+      model.total_mass() * -model.gravity.z() / (kSolePoints * config.contact.stiffness);
+  Kinematics kin;
+  ContactState soles;
+
+  State x;
+  x.v.setZero();
+  // Knee flexion k and hip flexion h with the ankle at k - h keep the feet parallel to the
+  // upright torso (hip and ankle turn about -y, the knee about +y).
+  const auto pose = [&](double knee, double hip) {
+    x.q.setZero();
+    x.q[3] = 1.0;
+    for (int leg = 0; leg < 2; ++leg) {
+      x.q[7 + leg * kJointsPerLeg + kHipFlexion] = hip;
+      x.q[7 + leg * kJointsPerLeg + kKnee] = knee;
+      x.q[7 + leg * kJointsPerLeg + kAnkle] = knee - hip;
+    }
+    dynamics.kinematics(x.q, x.v, kin);
+    contact.evaluate(kin, x.v, soles);
+  };
+  // Centre of mass minus the sole centre, along x.
+  const auto com_offset = [&](double knee, double hip) {
+    pose(knee, hip);
+    double m = 0.0, com = 0.0, sole = 0.0;
+    for (int i = 0; i < kBodies; ++i) {
+      m += model.bodies[i].mass;
+      com += model.bodies[i].mass * (kin.position[i] + kin.rotation[i] * model.bodies[i].com).x();
+    }
+    for (int i = 0; i < kSolePoints; ++i) sole += soles.position[i].x() / kSolePoints;
+    return com / m - sole;
+  };
+  // Hip flexion balancing a given knee flexion: secant iterations on com_offset.
+  const auto balanced_hip = [&](double knee) {
+    double h0 = 0.5 * knee, h1 = 0.5 * knee + 0.01;
+    double f0 = com_offset(knee, h0), f1 = com_offset(knee, h1);
+    for (int i = 0; i < 30 && std::abs(f1) > 1e-12 && f1 != f0; ++i) {
+      const double h2 = h1 - f1 * (h1 - h0) / (f1 - f0);
+      h0 = h1;
+      f0 = f1;
+      h1 = h2;
+      f1 = com_offset(knee, h1);
+    }
+    return h1;
+  };
+  // Base point height above the soles' sunk plane for a knee flexion.
+  const auto base_height = [&](double knee) {
+    pose(knee, balanced_hip(knee));
+    double lowest = soles.position[0].z();
+    for (int i = 1; i < kSolePoints; ++i) lowest = std::min(lowest, soles.position[i].z());
+    return (kin.position[0] + kin.rotation[0] * config.base_point).z() - lowest - sink;
+  };
+  // Bisection on the knee: the base point lowers monotonically as the knee bends.
+  double straight = 0.0, bent = model.joint_upper[kKnee];
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (straight + bent);
+    (base_height(mid) > height ? straight : bent) = mid;
+  }
+  const double knee = 0.5 * (straight + bent);
+  const double hip = balanced_hip(knee);
+  pose(knee, hip);
+  double lowest = soles.position[0].z(), centre = 0.0;
+  for (int i = 0; i < kSolePoints; ++i) {
+    lowest = std::min(lowest, soles.position[i].z());
+    centre += soles.position[i].x() / kSolePoints;
+  }
+  x.q[0] = -centre;  // sole centre at x = 0
+  x.q[2] = -lowest - sink;
+  return x;
+}
+
+}  // namespace hmpc::humanoid

@@ -1,0 +1,229 @@
+// Motion files (motion.hpp): the shipped files hold Tables 2.2-2.3, the loader rejects bad
+// files with the file, line and key, and the attitude quaternion keeps the flip count.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hmpc/humanoid/motion.hpp"
+
+namespace {
+
+using namespace hmpc::humanoid;
+
+std::string motion_path(const std::string& name) {
+  return std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion";
+}
+
+// One phase per row of {start, roll, pitch, yaw, height, v_x, v_y, v_z}.
+struct Row {
+  double start, roll, pitch, yaw, height, vx, vy, vz;
+};
+
+void expect_schedule(const std::string& name, const std::vector<Row>& rows) {
+  SCOPED_TRACE(name);
+  const Motion m = load_motion(motion_path(name));
+  ASSERT_EQ(m.phase_count, static_cast<int>(rows.size()));
+  for (int i = 0; i < m.phase_count; ++i) {
+    const Phase& p = m.phases[i];
+    const Row& r = rows[i];
+    EXPECT_DOUBLE_EQ(p.start, r.start) << "phase " << i + 1;
+    EXPECT_NEAR((p.attitude - Eigen::Vector3d(r.roll, r.pitch, r.yaw)).norm(), 0.0, 1e-12)
+        << "phase " << i + 1;
+    EXPECT_DOUBLE_EQ(p.height, r.height) << "phase " << i + 1;
+    EXPECT_NEAR((p.velocity - Eigen::Vector3d(r.vx, r.vy, r.vz)).norm(), 0.0, 1e-12)
+        << "phase " << i + 1;
+  }
+  EXPECT_GT(m.duration, rows.back().start);
+}
+
+TEST(HumanoidMotion, ShippedFilesHoldTable22) {
+  expect_schedule("I-standing", {{0, 0, 0, 0, 0.85, 0, 0, 0}});
+  expect_schedule("II-walking", {{0, 0, 0, 0, 0.85, 1.2, 0, 0}});
+  expect_schedule("III-running", {{0, 0, 0, 0, 0.85, 2.0, 0, 0}});
+}
+
+TEST(HumanoidMotion, ShippedFilesHoldTable23) {
+  const double pi = M_PI;
+  expect_schedule("IV-sitting", {{0, 0, 0, 0, 0.65, -1.5, 0, 0},
+                                 {0.3, 0, 0, 0, 0.65, 0, 0, 0},
+                                 {1.5, 0, 0, 0, 0.85, 1.5, 0, 0},
+                                 {1.8, 0, 0, 0, 0.85, 0, 0, 0}});
+  expect_schedule("V-low-jump", {{0, 0, 0, 0, 0.85, 0, 0, 0},
+                                 {0.4, 0, 0, 0, 1.8, 0, 0, 0},
+                                 {0.8, 0, 0, 0, 0.75, 0, 0, 0},
+                                 {1.5, 0, 0, 0, 0.85, 0, 0, 0}});
+  expect_schedule("VI-half-turn-jump", {{0, 0, 0, 0, 0.85, 0, 0, 0},
+                                        {0.4, 0, 0, pi, 1.8, 0, 0, 0},
+                                        {0.8, 0, 0, pi, 0.75, 0, 0, 0},
+                                        {1.5, 0, 0, pi, 0.85, 0, 0, 0}});
+  expect_schedule("VII-high-jump", {{0, 0, 0, 0, 0.0, 2.0, 0, 0},
+                                    {0.4, 0, 0, 0, 1.9, 0, 0, 0},
+                                    {0.8, 0, 0, 0, 0.75, 0, 0, 0},
+                                    {1.5, 0, 0, 0, 0.85, 0, 0, 0}});
+  // Six phases: execution and landing repeated one turn on (see the file's comment).
+  expect_schedule("VIII-double-flip", {{0, 0, 0, 0, 0.0, 2.0, 0, 0},
+                                       {0.4, 0, 1.5 * pi, 0, 1.9, 0, 0, 0},
+                                       {0.8, 0, 2.0 * pi, 0, 0.75, 0, 0, 0},
+                                       {1.2, 0, 3.5 * pi, 0, 1.9, 0, 0, 0},
+                                       {1.6, 0, 4.0 * pi, 0, 0.75, 0, 0, 0},
+                                       {2.2, 0, 4.0 * pi, 0, 0.85, 0, 0, 0}});
+  const Motion sitting = load_motion(motion_path("IV-sitting"));
+  EXPECT_TRUE(sitting.chair);
+  EXPECT_LT(sitting.seat_x_min, sitting.seat_x_max);
+  EXPECT_FALSE(load_motion(motion_path("V-low-jump")).chair);
+}
+
+TEST(HumanoidMotion, WeightsAreRead) {
+  const Motion m = load_motion(motion_path("I-standing"));
+  for (double w : m.weights.control) EXPECT_GT(w, 0.0);
+  EXPECT_GT(m.weights.height, 0.0);
+  EXPECT_GT(m.weights.attitude.minCoeff(), 0.0);
+  EXPECT_GT(m.weights.fast, 0.0);
+}
+
+TEST(HumanoidMotion, PhaseAtPicksTheLatestStarted) {
+  const Motion m = load_motion(motion_path("V-low-jump"));
+  EXPECT_DOUBLE_EQ(m.phase_at(-1.0).height, 0.85);
+  EXPECT_DOUBLE_EQ(m.phase_at(0.39).height, 0.85);
+  EXPECT_DOUBLE_EQ(m.phase_at(0.4).height, 1.8);
+  EXPECT_DOUBLE_EQ(m.phase_at(1.0).height, 0.75);
+  EXPECT_DOUBLE_EQ(m.phase_at(100.0).height, 0.85);
+}
+
+TEST(HumanoidMotion, AttitudeQuaternionMatchesEulerComposition) {
+  const Eigen::Vector3d a(0.3, -0.7, 2.1);
+  const Eigen::Quaterniond expected = Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+                                      Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                                      Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX());
+  const Eigen::Vector4d q = attitude_quaternion(a);
+  EXPECT_NEAR((q - Eigen::Vector4d(expected.w(), expected.x(), expected.y(), expected.z())).norm(),
+              0.0, 1e-14);
+  // One full flip is the quaternion -1, two are +1: Eq. 4.25 counts turns modulo two.
+  EXPECT_NEAR((attitude_quaternion({0, 2 * M_PI, 0}) - Eigen::Vector4d(-1, 0, 0, 0)).norm(), 0, 1e-15);
+  EXPECT_NEAR((attitude_quaternion({0, 4 * M_PI, 0}) - Eigen::Vector4d(1, 0, 0, 0)).norm(), 0, 1e-15);
+}
+
+// A valid file, edited per case below.
+const std::string kValid = R"(# comment
+hmpc-humanoid-motion 1
+[motion]
+duration = 1.0
+chair = none
+[weights]
+w_HAA = 1
+w_HFE = 1
+w_KFE = 1
+w_AFE = 1
+w_q1 = 1
+w_q2 = 1
+w_q3 = 1
+w_q4 = 1
+w_height = 1
+w_vx = 1
+w_vy = 1
+w_vz = 1
+w_alpha = 1
+w_beta = 1
+w_omega_x = 1
+w_omega_y = 1
+w_omega_z = 1
+w_fast = 1
+w_fast_control = 1
+[phase]
+start = 0
+attitude = 0 0 pi   # yaw half a turn
+height = 0.85
+velocity = 0 0 0
+[phase]
+start = 0.5
+attitude = 0 -1.5pi 0
+height = 0.75
+velocity = 1 0 0
+)";
+
+Motion parse(const std::string& text) {
+  std::istringstream in(text);
+  return parse_motion(in, "test.motion");
+}
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+// The error message of parsing `text`, or "" if it parses.
+std::string error_of(const std::string& text) {
+  try {
+    parse(text);
+  } catch (const MotionFileError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(HumanoidMotion, ParsesTheValidFile) {
+  const Motion m = parse(kValid);
+  ASSERT_EQ(m.phase_count, 2);
+  EXPECT_DOUBLE_EQ(m.phases[0].attitude.z(), M_PI);
+  EXPECT_DOUBLE_EQ(m.phases[1].attitude.y(), -1.5 * M_PI);
+  EXPECT_DOUBLE_EQ(m.phases[1].velocity.x(), 1.0);
+  EXPECT_FALSE(m.chair);
+  const Motion chair = parse(replace(kValid, "chair = none", "chair = 0.5 -0.6 -0.1"));
+  EXPECT_TRUE(chair.chair);
+  EXPECT_DOUBLE_EQ(chair.seat_height, 0.5);
+  EXPECT_DOUBLE_EQ(chair.seat_x_max, -0.1);
+}
+
+struct BadCase {
+  const char* what;
+  std::string text;
+  std::string expected;  // the message must contain "test.motion:<line>: <key>" and this
+};
+
+TEST(HumanoidMotion, RejectsBadFilesNamingFileLineAndKey) {
+  const std::vector<BadCase> cases{
+      {"unknown key", replace(kValid, "w_vz = 1", "w_vw = 1"), "test.motion:18: w_vw: unknown key"},
+      {"missing key", replace(kValid, "w_beta = 1\n", ""), "test.motion:6: w_beta: missing key"},
+      {"negative weight", replace(kValid, "w_height = 1", "w_height = -2"),
+       "test.motion:15: w_height: a weight must be >= 0"},
+      {"nan weight", replace(kValid, "w_alpha = 1", "w_alpha = nan"), "test.motion:19: w_alpha: not finite"},
+      {"infinite weight", replace(kValid, "w_q2 = 1", "w_q2 = inf"), "test.motion:12: w_q2: not finite"},
+      {"phases out of order", replace(kValid, "start = 0.5", "start = 0"),
+       "test.motion:32: start: phases out of order"},
+      {"first phase late", replace(kValid, "start = 0\n", "start = 0.1\n"),
+       "test.motion:27: start: the first phase must start at 0"},
+      {"duplicate key", replace(kValid, "w_KFE = 1", "w_HFE = 2"), "test.motion:9: w_HFE: duplicate key"},
+      {"garbage number", replace(kValid, "height = 0.85", "height = 0.8x"), "test.motion:29: height: not a number"},
+      {"wrong count", replace(kValid, "velocity = 1 0 0", "velocity = 1 0"),
+       "test.motion:35: velocity: expected 3 numbers"},
+      {"missing value", replace(kValid, "duration = 1.0", "duration ="), "test.motion:4: duration: missing value"},
+      {"zero duration", replace(kValid, "duration = 1.0", "duration = 0"), "test.motion:4: duration: must be > 0"},
+      {"bad chair", replace(kValid, "chair = none", "chair = 0.5 0.2 0.1"), "test.motion:5: chair: expected"},
+      {"bad version", replace(kValid, "hmpc-humanoid-motion 1", "hmpc-humanoid-motion 2"),
+       "test.motion:2: expected the version line"},
+      {"unknown section", replace(kValid, "[weights]", "[weight]"), "test.motion:6: unknown section [weight]"},
+      {"no phase", kValid.substr(0, kValid.find("[phase]")), "test.motion: missing section [phase]"},
+      {"setting outside a section", replace(kValid, "[motion]\n", ""), "test.motion:3: duration: setting outside"},
+  };
+  for (const BadCase& c : cases) {
+    const std::string message = error_of(c.text);
+    EXPECT_NE(message.find(c.expected), std::string::npos)
+        << c.what << ": got '" << message << "', expected it to contain '" << c.expected << "'";
+  }
+}
+
+TEST(HumanoidMotion, MissingFileIsAnErrorNamingIt) {
+  try {
+    load_motion("/nonexistent/x.motion");
+    FAIL() << "no error";
+  } catch (const MotionFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/x.motion"), std::string::npos);
+  }
+}
+
+}  // namespace

@@ -1,0 +1,256 @@
+// The humanoid's optimal control problem (problem.hpp) and the thread pool behind its parallel
+// linearisation (thread_pool.hpp): the stance helper, each cost term of Sec. 4.3.1 against its
+// definition, the Gauss-Newton derivatives, parallel == serial bit for bit, no allocation.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "hmpc/humanoid/problem.hpp"
+#include "hmpc/platform/linux/heap_monitor.hpp"
+#include "hmpc/solver/ilqr.hpp"
+
+namespace {
+
+using namespace hmpc::humanoid;
+namespace heap_monitor = hmpc::platform::heap_monitor;
+
+// A motion with every weight zero and one phase: standing still, upright, at 0.85 m.
+Motion bare_motion() {
+  Motion m;
+  m.duration = 1.0;
+  m.phase_count = 1;
+  m.phases[0].height = 0.85;
+  return m;
+}
+
+State standing() { return standing_state(ProblemConfig{}, 0.85); }
+
+TEST(HumanoidProblem, StandingStateIsAQuietStanceAtTheTarget) {
+  const ProblemConfig config;
+  const State x = standing();
+  const StateCost cost(bare_motion(), x, config);
+  const BaseFeatures f = cost.features(x);
+  EXPECT_NEAR(f.position.z(), 0.85, 1e-9);
+  EXPECT_NEAR((f.quaternion - Eigen::Vector4d(1, 0, 0, 0)).norm(), 0.0, 1e-15);
+  // Feet flat, soles sunk by the mean static sink.
+  StepMap map;
+  const ContactState& c = map.evaluate_contact(x);
+  const Model model;
+  const double weight = model.total_mass() * -model.gravity.z();
+  for (int i = 0; i < kSolePoints; ++i)
+    EXPECT_NEAR(c.position[i].z(), -weight / (kSolePoints * config.contact.stiffness), 1e-12);
+  // Nearly static: the soles carry the weight and the base rows of M a = tau - c + J'f need
+  // under 1 % of it (the joints' torques are free to balance the rest).
+  EXPECT_NEAR(vertical_load(c).sole, weight, 0.01 * weight);
+  const Velocity residual =
+      map.dynamics().bias_forces(x.q, x.v) - ContactModel::generalized_force(c);
+  EXPECT_LT(residual.head<6>().norm(), 0.01 * weight);
+}
+
+TEST(HumanoidProblem, EachCostTermFollowsItsEquation) {
+  const ProblemConfig config;
+  const State x0 = standing();
+  Motion m = bare_motion();
+
+  // Eq. 4.26: w_height (p_z^r - p_z)^2.
+  m.weights = CostWeights{};
+  m.weights.height = 3.0;
+  State x = x0;
+  x.q[2] += 0.01;
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), 3.0 * 0.01 * 0.01, 1e-15);
+
+  // Eq. 4.27: (v^r - v)' W_velocity (v^r - v), world velocity of the base point.
+  m.weights = CostWeights{};
+  m.weights.velocity << 1.0, 2.0, 3.0;
+  m.phases[0].velocity << 0.1, 0.0, 0.0;
+  x = x0;
+  x.v.segment<3>(3) << 0.3, -0.1, 0.2;
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0),
+              1.0 * 0.2 * 0.2 + 2.0 * 0.1 * 0.1 + 3.0 * 0.2 * 0.2, 1e-14);
+  m.phases[0].velocity.setZero();
+
+  // Eq. 4.25: a yaw of 0.3 rad against the upright target, unit weights: |q - 1|^2.
+  m.weights = CostWeights{};
+  m.weights.attitude.setOnes();
+  x = x0;
+  x.q.segment<4>(3) << std::cos(0.15), 0.0, 0.0, std::sin(0.15);
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), 2.0 - 2.0 * std::cos(0.15), 1e-14);
+  // ... and zero against a target of that yaw.
+  m.phases[0].attitude.z() = 0.3;
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), 0.0, 1e-15);
+  m.phases[0].attitude.setZero();
+
+  // Eq. 4.30: omega' W_omega omega, in world coordinates (the torso is yawed here).
+  m.weights = CostWeights{};
+  m.weights.angular_velocity << 1.0, 0.0, 0.0;
+  x.v.head<3>() << 0.2, 0.0, 0.0;  // body x, which the yaw turns off world x
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0),
+              std::pow(0.2 * std::cos(0.3), 2), 1e-14);
+}
+
+TEST(HumanoidProblem, LegAngleTermsFollowTheirEquations) {
+  const ProblemConfig config;
+  const State x0 = standing();
+  Motion m = bare_motion();
+  m.weights.alpha = 2.0;
+  m.weights.beta = 5.0;
+  const StateCost cost(m, x0, config);
+  const int left_hip = 7 + kHipFlexion, right_hip = 7 + kJointsPerLeg + kHipFlexion;
+
+  // Eq. 4.29: zero at the initial posture.
+  EXPECT_NEAR(cost.residual(to_vector(x0), 0.0).segment<2>(9).norm(), 0.0, 1e-15);
+
+  // Eq. 4.28: straight legs scissored symmetrically put the base midway: alpha_R = alpha_L.
+  State x = x0;
+  x.q.tail<kJoints>().setZero();
+  x.q[left_hip] = 0.2;
+  x.q[right_hip] = -0.2;
+  BaseFeatures f = cost.features(x);
+  EXPECT_LT(f.alpha_right, -0.05);  // right foot behind the base
+  EXPECT_NEAR(f.alpha_right - f.alpha_left, 0.0, 1e-12);
+  EXPECT_NEAR(cost.residual(to_vector(x), 0.0)[8], 0.0, 1e-12);
+  // Both legs forward: the base is behind both feet, and the term grows.
+  x.q[right_hip] = 0.2;
+  f = cost.features(x);
+  EXPECT_NEAR(f.alpha_right, -f.alpha_left, 1e-12);
+  EXPECT_NEAR(cost.residual(to_vector(x), 0.0)[8], std::sqrt(2.0) * (f.alpha_right - f.alpha_left), 1e-15);
+  EXPECT_GT(std::abs(f.alpha_right - f.alpha_left), 0.3);
+
+  // Eq. 4.29: abducting the left hip moves beta_L only.
+  x = x0;
+  x.q[7 + kHipAbduction] += 0.1;
+  const CostResidual r = cost.residual(to_vector(x), 0.0);
+  EXPECT_NEAR(r[9], 0.0, 1e-15);
+  EXPECT_GT(std::abs(r[10]), std::sqrt(5.0) * 0.05);
+}
+
+TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) {
+  const ProblemConfig config;
+  const State x0 = standing();
+  const Motion m = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/V-low-jump.motion");
+  const StateCost cost(m, x0, config);
+  StateVector x = to_vector(x0);
+  Eigen::Matrix<double, kStateSize, 1> perturbation;
+  perturbation.setRandom();
+  x += 0.05 * perturbation;
+  x.segment<4>(3).normalize();
+  StateVector lx;
+  StateMatrix lxx;
+  const double time = 0.5;  // in the jump phase: every term active
+  cost.derivatives(x, time, lx, lxx);
+  Eigen::Matrix<double, 1, kStateSize> gradient;
+  hmpc::central_difference_jacobian(
+      [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(cost.value(xp, time)); }, x,
+      gradient);
+  const StateVector numeric = gradient.transpose();
+  EXPECT_LT((lx - numeric).norm(), 1e-5 * numeric.norm());
+  EXPECT_NEAR((lxx - lxx.transpose()).norm(), 0.0, 1e-12 * lxx.norm());
+  const Eigen::SelfAdjointEigenSolver<StateMatrix> eigen(lxx);
+  EXPECT_GT(eigen.eigenvalues().minCoeff(), -1e-9 * lxx.norm());
+}
+
+TEST(HumanoidProblem, DynamicsIsTheStepMapAndTorquesAreBounded) {
+  const ProblemConfig config;
+  const State x0 = standing();
+  auto problem = std::make_unique<HumanoidProblem<3>>(bare_motion(), x0, config);
+  JointVector tau;
+  tau.setLinSpaced(-20.0, 20.0);
+  StepMap map(Model{}, Parameters{}, ContactParameters{}, config.max_substep);
+  const State expected = map.step(x0, tau, config.step);
+  EXPECT_EQ(problem->dynamics(to_vector(x0), tau, 2), to_vector(expected));
+  const Model model;
+  EXPECT_EQ(problem->control_upper_bound(0), model.torque_limit);
+  EXPECT_EQ(problem->control_lower_bound(1), -model.torque_limit);
+  // The running cost adds Eq. 4.24 to the state terms.
+  Motion m = bare_motion();
+  m.weights.control = {1.0, 2.0, 3.0, 4.0};
+  const HumanoidProblem<3> weighted(m, x0, config);
+  JointVector u = JointVector::Zero();
+  u[2] = 10.0;   // left knee
+  u[7] = -1.0;   // right ankle
+  EXPECT_NEAR(weighted.running_cost(to_vector(x0), u, 0), 3.0 * 100.0 + 4.0 * 1.0, 1e-12);
+}
+
+// One iLQR solve of a short horizon, with or without a pool.
+struct Solve {
+  using Problem = HumanoidProblem<4>;
+  using Solver = hmpc::Ilqr<Problem, 4>;
+  StateVector x0 = to_vector(standing());
+  std::unique_ptr<Problem> problem;
+  std::unique_ptr<Solver> solver;
+  explicit Solve(ThreadPool* pool) {
+    const Motion m = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/I-standing.motion");
+    problem = std::make_unique<Problem>(m, to_state(x0), ProblemConfig{}, pool);
+    solver = std::make_unique<Solver>(hmpc::IlqrConfig<double>::with_cap_and_tolerance(3, 1e-9));
+  }
+  Solver::Result run() { return solver->solve(*problem, x0); }
+};
+
+TEST(HumanoidProblem, ParallelLinearisationIsBitIdenticalToSerial) {
+  Solve serial(nullptr);
+  const auto reference = serial.run();
+  ASSERT_TRUE(hmpc::plan_is_usable(reference.status));
+  ASSERT_GE(reference.iterations, 2);
+  for (int threads : {2, 3}) {
+    ThreadPool pool(threads);
+    Solve parallel(&pool);
+    const auto result = parallel.run();
+    EXPECT_EQ(result.iterations, reference.iterations) << threads << " threads";
+    EXPECT_EQ(result.cost, reference.cost) << threads << " threads";
+    for (int t = 0; t < 4; ++t) {
+      EXPECT_EQ(parallel.solver->controls()[t], serial.solver->controls()[t]) << "step " << t;
+      EXPECT_EQ(parallel.solver->feedback_gains()[t], serial.solver->feedback_gains()[t]) << "step " << t;
+    }
+    EXPECT_EQ(parallel.solver->states()[4], serial.solver->states()[4]);
+  }
+}
+
+TEST(HumanoidProblem, ParallelSolveDoesNotAllocate) {
+  ThreadPool pool(2);
+  Solve solve(&pool);
+  solve.run();  // warm-up
+  solve.solver->set_zero_controls();
+  const auto before = heap_monitor::allocations();
+  heap_monitor::arm();
+  const auto result = solve.run();
+  heap_monitor::disarm();
+  EXPECT_EQ(heap_monitor::allocations() - before, 0u);
+  EXPECT_GE(result.iterations, 1);
+}
+
+TEST(HumanoidThreadPool, RunsEveryIndexExactlyOnce) {
+  for (int threads : {1, 2, 4}) {
+    ThreadPool pool(threads);
+    EXPECT_EQ(pool.threads(), threads);
+    for (int count : {0, 1, 3, 100}) {
+      std::vector<std::atomic<int>> runs(count);
+      for (int repeat = 0; repeat < 3; ++repeat) pool.for_each(count, [&](int i) { ++runs[i]; });
+      for (int i = 0; i < count; ++i)
+        EXPECT_EQ(runs[i].load(), 3) << threads << " threads, index " << i << " of " << count;
+    }
+  }
+}
+
+TEST(HumanoidThreadPool, RunsTasksConcurrently) {
+  // Two tasks that each wait (up to 10 s) for the other to start can only both see the other
+  // if they run at the same time.
+  ThreadPool pool(2);
+  std::atomic<int> started{0};
+  std::atomic<int> met{0};
+  pool.for_each(2, [&](int) {
+    ++started;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (started.load() < 2 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+    if (started.load() == 2) ++met;
+  });
+  EXPECT_EQ(met.load(), 2);
+}
+
+}  // namespace
