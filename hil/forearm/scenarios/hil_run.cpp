@@ -85,19 +85,21 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
   const std::string dir = spec.directory + "/";
   const double duration = spec.run_at_s + spec.run_for_s + spec.settle_s;
 
-  std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7"};
+  const std::string node = std::to_string(spec.node);
+  std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7", "--node",
+                                      node};
   if (spec.w_v > 0) {
     board_args.push_back("--w-v");
     board_args.push_back(number_text(spec.w_v));
   }
   std::vector<std::string> host_args{
-      "--lockstep", "--run", strategy_name(spec.strategy), "--frequency",
+      "--lockstep", "--node", node, "--run", strategy_name(spec.strategy), "--frequency",
       number_text(spec.frequency_hz), "--amplitude-deg", number_text(spec.amplitude_rad * 180 / M_PI),
       "--run-at", number_text(spec.run_at_s), "--run-for", number_text(spec.run_for_s),
       "--log", dir + "host.csv"};
   host_args.insert(host_args.end(), spec.host_args.begin(), spec.host_args.end());
   std::vector<std::string> plant_args{
-      "--lockstep", "--wait-host", "--duration", number_text(duration), "--noise",
+      "--lockstep", "--node", node, "--wait-host", "--duration", number_text(duration), "--noise",
       number_text(spec.noise_scale), "--seed", std::to_string(spec.seed), "--mass-scale",
       number_text(spec.mismatch.mass_scale), "--friction-scale",
       number_text(spec.mismatch.friction_scale), "--pam-time-scale",

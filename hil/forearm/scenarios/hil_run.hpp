@@ -27,6 +27,7 @@ struct HilPrograms {
 
 struct HilRunSpec {
   forearm_protocol::Strategy strategy = forearm_protocol::Strategy::kTwoStage;
+  forearm_protocol::NodeId node = 0;  // board node id: runs at once on one bus use different ones
   double frequency_hz = 1.0;
   double amplitude_rad = 30 * 3.14159265358979323846 / 180;  // thesis Sec. 3.3: +-30 deg
   double run_for_s = 10;          // thesis Sec. 3.4: 10-s trials

@@ -11,13 +11,16 @@
 //                                    (Figs. 3.3b, 3.6, 3.3a)
 //   hil_weight_sweep.png             with --weight-sweep: cost for w_v = 0.02, 0.002, 0.0002
 //                                    at 1 Hz (Fig. 3.4)
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hil_run.hpp"
@@ -47,12 +50,13 @@ struct Options {
   double noise = 1;
   bool mismatch = true;
   bool weight_sweep = false;
+  long jobs = 1;
 };
 
 void print_usage(std::FILE* out) {
   std::fprintf(out,
       "usage: hmpc-forearm-hil --out DIR [--strategies LIST] [--frequencies LIST] [--trials N]\n"
-      "         [--duration S] [--noise SCALE] [--no-mismatch] [--weight-sweep]\n"
+      "         [--duration S] [--noise SCALE] [--no-mismatch] [--weight-sweep] [--jobs N]\n"
       "Runs board, host and Simbody plant in lock-step over vcan0 for each strategy, target\n"
       "frequency (+-30 deg sinusoids) and trial (a different noise seed each), and writes CSV,\n"
       "a markdown table and PNG plots to DIR. Run it with vcan0 up, e.g. through\n"
@@ -66,7 +70,8 @@ void print_usage(std::FILE* out) {
       "  --no-mismatch       plant = controller's model (default: mass x1.05, friction x1.2,\n"
       "                      valve time constant x1.1)\n"
       "  --weight-sweep      also run Two-stage, Coarse 20 ms and Fine 4 ms at 1 Hz for\n"
-      "                      w_v = 0.02, 0.002, 0.0002 (Fig. 3.4)\n");
+      "                      w_v = 0.02, 0.002, 0.0002 (Fig. 3.4)\n"
+      "  --jobs N            runs at once, 1..4, each on its own board node id (default 1)\n");
 }
 
 std::vector<std::string> split(const std::string& text) {
@@ -81,6 +86,16 @@ std::string name(proto::Strategy s) {
   return proto::value_name(proto::kStrategyValues, std::uint32_t(s));
 }
 
+bool strategy_from_name(const std::string& text, proto::Strategy& out) {
+  for (const proto::EnumValue& e : proto::kStrategyValues) {
+    if (text == e.name) {
+      out = proto::Strategy(e.value);
+      return true;
+    }
+  }
+  return false;
+}
+
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
   hmpc::cli::OptionParser p;
   p.text("--out", [&](const std::string& v) -> std::string {
@@ -91,14 +106,9 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.text("--strategies", [&](const std::string& v) -> std::string {
     o.strategies.clear();
     for (const std::string& item : split(v)) {
-      bool known = false;
-      for (const proto::EnumValue& e : proto::kStrategyValues) {
-        if (item == e.name) {
-          o.strategies.push_back(proto::Strategy(e.value));
-          known = true;
-        }
-      }
-      if (!known) return "--strategies: unknown strategy '" + item + "'";
+      proto::Strategy s;
+      if (!strategy_from_name(item, s)) return "--strategies: unknown strategy '" + item + "'";
+      o.strategies.push_back(s);
     }
     return o.strategies.empty() ? "--strategies needs at least one strategy" : "";
   });
@@ -118,6 +128,7 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   bool no_mismatch = false;
   p.flag("--no-mismatch", no_mismatch);
   p.flag("--weight-sweep", o.weight_sweep);
+  p.integer("--jobs", 1, 4, o.jobs);
   const auto outcome = p.parse(argc, argv, error);
   o.mismatch = !no_mismatch;
   if (outcome == hmpc::cli::ParseOutcome::kRun && o.out.empty()) {
@@ -364,44 +375,57 @@ int main(int argc, char** argv) {
     case hmpc::cli::ParseOutcome::kRun: break;
   }
   const hmpc::hil::HilPrograms programs = hmpc::hil::HilPrograms::built();
+  // Every run to make, in the order of the tables; each gets its row slot.
   std::vector<Row> rows;
-  const auto run = [&](proto::Strategy strategy, double f, double w_v, long trial) {
-    HilRunSpec spec;
-    spec.strategy = strategy;
-    spec.frequency_hz = f;
-    spec.run_for_s = o.duration_s;
-    spec.noise_scale = o.noise;
-    spec.seed = std::uint64_t(trial);
-    spec.w_v = w_v;
-    if (o.mismatch) spec.mismatch = kDefaultMismatch;
-    spec.directory = run_dir(o.out, name(strategy), f, w_v, trial);
-    Row row{name(strategy), f, w_v, trial, hmpc::hil::run_hil(spec, programs)};
-    if (!row.r.ok) {
-      std::fprintf(stderr, "%s: %s at %g Hz, trial %ld failed: %s\n", kProgram,
-                   row.strategy.c_str(), f, trial, row.r.error.c_str());
-      return false;
-    }
-    std::printf("%s: %-12s %5.2f Hz trial %ld: cost %8.1f  RMS %.3f deg  max solve %.2f ms  "
-                "misses %.0f  motor share %.1f %%  plant RTF %.2f\n",
-                kProgram, row.strategy.c_str(), f, trial, row.r.accumulated_cost,
-                row.r.rms_error * 180 / M_PI, row.r.solve_time_max_us / 1e3,
-                row.r.deadline_misses, 100 * row.r.motor_share(),
-                row.r.number(row.r.plant, "real_time_factor"));
-    std::fflush(stdout);
-    rows.push_back(std::move(row));
-    return true;
-  };
   for (double f : o.frequencies)
     for (proto::Strategy s : o.strategies)
-      for (long trial = 1; trial <= o.trials; ++trial)
-        if (!run(s, f, 0, trial)) return 1;
+      for (long trial = 1; trial <= o.trials; ++trial) rows.push_back({name(s), f, 0, trial, {}});
   if (o.weight_sweep) {
     for (double w_v : kSweepWeights)
       for (proto::Strategy s : {proto::Strategy::kFine4ms, proto::Strategy::kCoarse20ms,
                                 proto::Strategy::kTwoStage})
         for (long trial = 1; trial <= o.trials; ++trial)
-          if (!run(s, 1.0, w_v, trial)) return 1;
+          rows.push_back({name(s), 1.0, w_v, trial, {}});
   }
+  // --jobs workers, each with its own board node id on the bus (the protocol's node filter
+  // keeps their frames apart), take the runs in order.
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::mutex print;
+  const auto worker = [&](proto::NodeId node) {
+    for (std::size_t i = next++; i < rows.size() && !failed; i = next++) {
+      Row& row = rows[i];
+      HilRunSpec spec;
+      strategy_from_name(row.strategy, spec.strategy);
+      spec.node = node;
+      spec.frequency_hz = row.frequency;
+      spec.run_for_s = o.duration_s;
+      spec.noise_scale = o.noise;
+      spec.seed = std::uint64_t(row.trial);
+      spec.w_v = row.w_v;
+      if (o.mismatch) spec.mismatch = kDefaultMismatch;
+      spec.directory = run_dir(o.out, row.strategy, row.frequency, row.w_v, row.trial);
+      row.r = hmpc::hil::run_hil(spec, programs);
+      const std::lock_guard<std::mutex> lock(print);
+      if (!row.r.ok) {
+        std::fprintf(stderr, "%s: %s at %g Hz, trial %ld failed: %s\n", kProgram,
+                     row.strategy.c_str(), row.frequency, row.trial, row.r.error.c_str());
+        failed = true;
+        return;
+      }
+      std::printf("%s: %-12s %5.2f Hz w_v %-6g trial %ld: cost %8.1f  RMS %.3f deg  max solve "
+                  "%.2f ms  misses %.0f  motor share %.1f %%  plant RTF %.2f\n",
+                  kProgram, row.strategy.c_str(), row.frequency, row.w_v > 0 ? row.w_v : 0.002,
+                  row.trial, row.r.accumulated_cost, row.r.rms_error * 180 / M_PI,
+                  row.r.solve_time_max_us / 1e3, row.r.deadline_misses,
+                  100 * row.r.motor_share(), row.r.number(row.r.plant, "real_time_factor"));
+      std::fflush(stdout);
+    }
+  };
+  std::vector<std::thread> workers;
+  for (long j = 0; j < o.jobs; ++j) workers.emplace_back(worker, proto::NodeId(j));
+  for (std::thread& w : workers) w.join();
+  if (failed) return 1;
   write_tables(o.out, rows, o);
   if (!plot(o.out, rows, o)) {
     std::fprintf(stderr, "%s: gnuplot failed (see %s/hil_plots.log); install it with "
