@@ -30,7 +30,7 @@
 #include "hmpc/cli/arguments.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 #include "hmpc/host/forearm_can_master.hpp"
-#include "hmpc/platform/linux/protocol_frames.hpp"
+#include "hmpc/platform/linux/bus_program.hpp"
 
 namespace {
 
@@ -40,6 +40,8 @@ using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
 using hmpc::platform::SocketCan;
+using hmpc::platform::describe;
+using hmpc::platform::monotonic_seconds;
 
 constexpr const char* kProgram = "hmpc-forearm-host";
 constexpr double kDegree = M_PI / 180;
@@ -92,16 +94,6 @@ void print_usage(std::FILE* out) {
       kHoldAt);
 }
 
-bool strategy_from_name(const std::string& name, proto::Strategy& out) {
-  for (const proto::EnumValue& v : proto::kStrategyValues) {
-    if (name == v.name) {
-      out = proto::Strategy(v.value);
-      return true;
-    }
-  }
-  return false;
-}
-
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
   hmpc::cli::OptionParser p;
   p.text("--interface", [&](const std::string& v) -> std::string {
@@ -113,9 +105,11 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.flag("--lockstep", o.lockstep);
   p.number("--duration", 1e-3, 1e6, "a number of seconds in [0.001, 1e6]", o.duration_s);
   p.text("--run", [&](const std::string& v) -> std::string {
-    if (!strategy_from_name(v, o.strategy))
+    std::uint32_t value = 0;
+    if (!proto::value_of(proto::kStrategyValues, v, value))
       return hmpc::cli::bad_value("--run", "one of fine_4ms fine_8ms coarse_20ms coarse_40ms "
                                            "two_stage pam_only", v);
+    o.strategy = proto::Strategy(value);
     o.scripted = true;
     return {};
   });
@@ -157,18 +151,6 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
     return hmpc::cli::ParseOutcome::kError;
   }
   return outcome;
-}
-
-double monotonic_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
-}
-
-std::string describe(const CanResult& result) {
-  std::string text = hmpc::platform::to_string(result.status);
-  if (result.error_number != 0) text += std::string(" (") + std::strerror(result.error_number) + ")";
-  return text;
 }
 
 double median(std::vector<double> v) {
@@ -449,25 +431,14 @@ int main(int argc, char** argv) {
     case hmpc::cli::ParseOutcome::kRun: break;
   }
 
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  ::sigprocmask(SIG_BLOCK, &stop_signals, nullptr);
-  const int signal_fd = ::signalfd(-1, &stop_signals, SFD_CLOEXEC);
+  const int signal_fd = hmpc::platform::stop_signal_descriptor(error);
   if (signal_fd < 0) {
-    std::fprintf(stderr, "%s: signalfd: %s\n", kProgram, std::strerror(errno));
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }
-
   SocketCan can;
-  CanResult opened = can.open(options.interface.c_str());
-  const hmpc::platform::CanFilter this_node = hmpc::platform::node_filter(options.node);
-  if (opened.ok()) opened = can.set_filters(&this_node, 1);
-  if (opened.ok()) opened = can.set_non_blocking(true);
-  if (!opened.ok()) {
-    std::fprintf(stderr, "%s: cannot open CAN interface '%s': %s\n", kProgram,
-                 options.interface.c_str(), describe(opened).c_str());
+  if (!hmpc::platform::open_node_bus(can, options.interface, options.node, true, error)) {
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }
 
@@ -485,14 +456,15 @@ int main(int argc, char** argv) {
 
   std::FILE* log = nullptr;
   if (!options.log_path.empty()) {
-    log = std::fopen(options.log_path.c_str(), "w");
+    log = hmpc::platform::open_csv_log(
+        options.log_path,
+        "time_s,mode,strategy,faults,theta_rad,theta_d_rad,v_p_V,v_m_V,tau_p_Nm,tau_m_Nm,"
+        "solve_status,coarse_iterations,fine_iterations,solve_time_us",
+        error);
     if (!log) {
-      std::fprintf(stderr, "%s: cannot write the log '%s': %s\n", kProgram,
-                   options.log_path.c_str(), std::strerror(errno));
+      std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
       return 1;
     }
-    std::fprintf(log, "time_s,mode,strategy,faults,theta_rad,theta_d_rad,v_p_V,v_m_V,tau_p_Nm,"
-                      "tau_m_Nm,solve_status,coarse_iterations,fine_iterations,solve_time_us\n");
   }
 
   std::printf("%s: node %u on %s, %s%s: ready\n", kProgram, unsigned(options.node),

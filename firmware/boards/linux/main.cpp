@@ -30,7 +30,7 @@
 #include <cstring>
 #include <string>
 
-#include "hmpc/platform/linux/protocol_frames.hpp"
+#include "hmpc/platform/linux/bus_program.hpp"
 #include "forearm_board.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/platform/linux/socketcan.hpp"
@@ -45,6 +45,8 @@ using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
 using hmpc::platform::SocketCan;
+using hmpc::platform::describe;
+using hmpc::platform::monotonic_seconds;
 using hmpc::platform::to_can_frame;
 using hmpc::platform::to_protocol_frame;
 namespace heap_monitor = hmpc::platform::heap_monitor;
@@ -55,19 +57,6 @@ constexpr long kTickNs = 1'000'000;
 // Frames taken from the socket per wake-up: a flooded bus must not starve the tick.
 constexpr int kMaxFramesPerDrain = 64;
 
-double monotonic_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
-}
-
-std::string describe(const CanResult& result) {
-  std::string text = hmpc::platform::to_string(result.status);
-  if (result.error_number != 0) {
-    text += std::string(" (") + std::strerror(result.error_number) + ")";
-  }
-  return text;
-}
 
 class FileDescriptor {
  public:
@@ -278,30 +267,15 @@ int main(int argc, char** argv) {
 
   // SIGINT and SIGTERM are read from a descriptor the loop polls, so they end it between
   // ticks, never inside one.
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  if (::sigprocmask(SIG_BLOCK, &stop_signals, nullptr) < 0) {
-    std::fprintf(stderr, "%s: cannot block SIGINT/SIGTERM: %s\n", kProgram, std::strerror(errno));
-    return 1;
-  }
-  const FileDescriptor signals(::signalfd(-1, &stop_signals, SFD_CLOEXEC));
+  const FileDescriptor signals(hmpc::platform::stop_signal_descriptor(error));
   if (signals.get() < 0) {
-    std::fprintf(stderr, "%s: signalfd: %s\n", kProgram, std::strerror(errno));
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }
-
+  // Only this node's frames: the board ignores the rest anyway.
   SocketCan can;
-  CanResult opened = can.open(options.interface.c_str());
-  // Only this node's frames: the board ignores the rest anyway, and a busy bus then costs
-  // the kernel's filter, not the loop.
-  const hmpc::platform::CanFilter this_node = hmpc::platform::node_filter(options.node);
-  if (opened.ok()) opened = can.set_filters(&this_node, 1);
-  if (opened.ok()) opened = can.set_non_blocking(true);
-  if (!opened.ok()) {
-    std::fprintf(stderr, "%s: cannot open CAN interface '%s': %s\n", kProgram,
-                 options.interface.c_str(), describe(opened).c_str());
+  if (!hmpc::platform::open_node_bus(can, options.interface, options.node, true, error)) {
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }
 

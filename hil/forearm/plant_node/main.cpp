@@ -29,7 +29,7 @@
 
 #include "../simbody_forearm.hpp"
 #include "fault_injector.hpp"
-#include "hmpc/platform/linux/protocol_frames.hpp"
+#include "hmpc/platform/linux/bus_program.hpp"
 #include "options.hpp"
 
 namespace {
@@ -41,6 +41,8 @@ using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
 using hmpc::platform::SocketCan;
+using hmpc::platform::describe;
+using hmpc::platform::monotonic_seconds;
 
 constexpr const char* kProgram = "hmpc-forearm-plant";
 constexpr int kHeartbeatPeriodTicks = 10;  // the host's ModeCommand period (protocol)
@@ -52,18 +54,6 @@ constexpr int kHostMissesBeforeGivingUp = 3;
 // stops' compression when the vented arm falls onto them from the top of the range (~0.03 rad,
 // forearm.hpp) with a margin.
 constexpr double kStopTolerance = 0.05;    // rad
-
-double monotonic_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
-}
-
-std::string describe(const CanResult& result) {
-  std::string text = hmpc::platform::to_string(result.status);
-  if (result.error_number != 0) text += std::string(" (") + std::strerror(result.error_number) + ")";
-  return text;
-}
 
 struct Summary {
   std::uint64_t steps = 0;
@@ -322,14 +312,9 @@ int main(int argc, char** argv) {
     case ParseOutcome::kRun: break;
   }
 
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  ::sigprocmask(SIG_BLOCK, &stop_signals, nullptr);
-  const int signal_fd = ::signalfd(-1, &stop_signals, SFD_CLOEXEC);
+  const int signal_fd = hmpc::platform::stop_signal_descriptor(error);
   if (signal_fd < 0) {
-    std::fprintf(stderr, "%s: signalfd: %s\n", kProgram, std::strerror(errno));
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }
 
@@ -345,25 +330,19 @@ int main(int argc, char** argv) {
   }
 
   SocketCan can;
-  CanResult opened = can.open(options.interface.c_str());
-  const hmpc::platform::CanFilter this_node = hmpc::platform::node_filter(options.node);
-  if (opened.ok()) opened = can.set_filters(&this_node, 1);
-  if (!opened.ok()) {
-    std::fprintf(stderr, "%s: cannot open CAN interface '%s': %s\n", kProgram,
-                 options.interface.c_str(), describe(opened).c_str());
+  if (!hmpc::platform::open_node_bus(can, options.interface, options.node, false, error)) {
+    std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }
-
   std::FILE* log = nullptr;
   if (!options.log_path.empty()) {
-    log = std::fopen(options.log_path.c_str(), "w");
+    log = hmpc::platform::open_csv_log(
+        options.log_path,
+        "time_s,theta_rad,theta_dot_rad_s,pressure_bar,v_p_V,v_m_V,tau_p_Nm,tau_m_Nm", error);
     if (!log) {
-      std::fprintf(stderr, "%s: cannot write the log '%s': %s\n", kProgram,
-                   options.log_path.c_str(), std::strerror(errno));
+      std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
       return 1;
     }
-    std::fprintf(log, "time_s,theta_rad,theta_dot_rad_s,pressure_bar,v_p_V,v_m_V,tau_p_Nm,"
-                      "tau_m_Nm\n");
   }
 
   std::printf("%s: node %u on %s, %s, mismatch mass x%.3g friction x%.3g T_p x%.3g: ready\n",

@@ -87,13 +87,10 @@ std::string name(proto::Strategy s) {
 }
 
 bool strategy_from_name(const std::string& text, proto::Strategy& out) {
-  for (const proto::EnumValue& e : proto::kStrategyValues) {
-    if (text == e.name) {
-      out = proto::Strategy(e.value);
-      return true;
-    }
-  }
-  return false;
+  std::uint32_t value = 0;
+  if (!proto::value_of(proto::kStrategyValues, text, value)) return false;
+  out = proto::Strategy(value);
+  return true;
 }
 
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {

@@ -118,8 +118,9 @@ double positive_seconds(const std::string& option, const std::string& text) {
 // A name, or with --raw-sample any code 0..255 (to send an invalid one on purpose).
 proto::Strategy strategy_of(const Options& o) {
   // The protocol's names (its DBC value table), as every program uses them.
-  for (const proto::EnumValue& s : proto::kStrategyValues) {
-    if (o.strategy == s.name) return static_cast<proto::Strategy>(s.value);
+  std::uint32_t value = 0;
+  if (proto::value_of(proto::kStrategyValues, o.strategy, value)) {
+    return static_cast<proto::Strategy>(value);
   }
   if (o.raw_sample) {
     return static_cast<proto::Strategy>(integer("--strategy", o.strategy, 0, 255));

@@ -37,6 +37,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string_view>
 #include <limits>
 #include <type_traits>
 
@@ -194,6 +195,19 @@ constexpr const char* value_name(const EnumValue (&values)[N], std::uint32_t val
   for (const auto& v : values)
     if (v.value == value) return v.name;
   return "?";
+}
+
+// The value of an enumerated signal by its DBC name (as the programs' command lines take them);
+// false for an unknown name.
+template <std::size_t N>
+constexpr bool value_of(const EnumValue (&values)[N], std::string_view name, std::uint32_t& out) {
+  for (const auto& v : values) {
+    if (name == v.name) {
+      out = v.value;
+      return true;
+    }
+  }
+  return false;
 }
 
 struct EnumValueList {

@@ -1,0 +1,71 @@
+// Start-up and shutdown pieces shared by the Linux programs on the forearm's bus (the board,
+// the HIL plant node, the host controller): the clock, stop signals as a descriptor the loops
+// poll, one node's frames on a SocketCAN interface, CSV logs, and error text.
+#pragma once
+
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <time.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "hmpc/platform/linux/protocol_frames.hpp"
+#include "hmpc/platform/linux/socketcan.hpp"
+
+namespace hmpc::platform {
+
+inline double monotonic_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
+}
+
+inline std::string describe(const CanResult& result) {
+  std::string text = to_string(result.status);
+  if (result.error_number != 0) text += std::string(" (") + std::strerror(result.error_number) + ")";
+  return text;
+}
+
+// Blocks SIGINT and SIGTERM and returns a descriptor they can be read from, so a loop ends
+// between its steps, never inside one; -1 with `error` set on failure.
+inline int stop_signal_descriptor(std::string& error) {
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  if (::sigprocmask(SIG_BLOCK, &stop_signals, nullptr) < 0) {
+    error = std::string("cannot block SIGINT/SIGTERM: ") + std::strerror(errno);
+    return -1;
+  }
+  const int fd = ::signalfd(-1, &stop_signals, SFD_CLOEXEC);
+  if (fd < 0) error = std::string("signalfd: ") + std::strerror(errno);
+  return fd;
+}
+
+// Opens `interface` for the frames of one node only (a busy bus then costs the kernel's
+// filter, not the program's loop); `error` names the interface and the reason on failure.
+inline bool open_node_bus(SocketCan& can, const std::string& interface,
+                          forearm_protocol::NodeId node, bool non_blocking, std::string& error) {
+  CanResult opened = can.open(interface.c_str());
+  const CanFilter this_node = node_filter(node);
+  if (opened.ok()) opened = can.set_filters(&this_node, 1);
+  if (opened.ok() && non_blocking) opened = can.set_non_blocking(true);
+  if (!opened.ok()) error = "cannot open CAN interface '" + interface + "': " + describe(opened);
+  return opened.ok();
+}
+
+// A CSV log with its header line; nullptr with `error` set when it cannot be written.
+inline std::FILE* open_csv_log(const std::string& path, const char* header, std::string& error) {
+  std::FILE* log = std::fopen(path.c_str(), "w");
+  if (!log) {
+    error = "cannot write the log '" + path + "': " + std::strerror(errno);
+    return nullptr;
+  }
+  std::fprintf(log, "%s\n", header);
+  return log;
+}
+
+}  // namespace hmpc::platform
