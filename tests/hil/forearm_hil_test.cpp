@@ -12,10 +12,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
 
+#include "child_process.hpp"
 #include "hil_run.hpp"
 
 namespace {
@@ -226,6 +228,36 @@ TEST(ForearmHilFaults, CorruptedHostFramesAreRejectedNeverActedOn) {
   } else {
     EXPECT_EQ(r.number(r.host, "board_faults"), 0);
   }
+}
+
+// ---- real time ---------------------------------------------------------------------------
+
+// Without --lockstep a 1 kHz timer paces the plant: one Sensor frame per step, no Sync, and the
+// run takes its simulated time on the wall clock. Where the machine is too slow for that (the
+// Simbody plant under QEMU without KVM runs at ~0.25x), it says so: the steps it took late
+// are counted as deadline misses and its real-time factor is below 1.
+TEST(ForearmPlantNode, RealTimeModeIsPacedByTheClockAndReportsItsSpeed) {
+  const std::string out = work_dir() + "/plant_real_time";
+  std::filesystem::create_directories(out);
+  hmpc::hil::Child plant;
+  std::string error;
+  ASSERT_TRUE(plant.start(hmpc::hil::HilPrograms::built().plant,
+                          {"--node", "9", "--duration", "0.5", "--log", out + "/plant.csv"},
+                          out + "/plant.out", error))
+      << error;
+  ASSERT_EQ(plant.wait(120), 0) << plant.errors();
+  const auto s = hmpc::hil::parse_summary(plant.output());
+  std::printf("real time: %s s wall for 0.5 s, real-time factor %s, deadline misses %s\n",
+              s.at("wall_seconds").c_str(), s.at("real_time_factor").c_str(),
+              s.at("deadline_misses").c_str());
+  EXPECT_EQ(s.at("steps"), "500");
+  EXPECT_EQ(s.at("sensor_frames"), "500");
+  EXPECT_EQ(s.at("syncs"), "0");
+  const double wall = std::stod(s.at("wall_seconds"));
+  EXPECT_GE(wall, 0.49);  // paced by the clock, never faster
+  EXPECT_NEAR(std::stod(s.at("real_time_factor")), 0.5 / wall, 0.01);
+  if (wall > 0.6) EXPECT_GT(std::stod(s.at("deadline_misses")), 0);
+  EXPECT_EQ(double(lines_of(out + "/plant.csv")), 501);
 }
 
 }  // namespace

@@ -286,7 +286,8 @@ End run_real_time(const Options& o, SocketCan& can, PlantNode& node, int signal_
     std::uint64_t expirations = 0;
     if (::read(timer, &expirations, sizeof expirations) != sizeof expirations) continue;
     node.summary().deadline_misses += expirations - 1;
-    for (std::uint64_t i = 0; i < expirations; ++i) {
+    for (std::uint64_t i = 0; i < expirations && (steps == 0 || node.summary().steps < steps);
+         ++i) {
       node.step();
       if (!node.send_sensor(error)) {
         ::close(timer);
