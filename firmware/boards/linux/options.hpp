@@ -3,9 +3,7 @@
 
 #include <net/if.h>
 
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "hmpc/cli/arguments.hpp"
@@ -54,77 +52,38 @@ inline void print_usage(std::FILE* out) {
       kLogMinutes);
 }
 
-enum class ParseOutcome { kRun, kHelp, kError };
+using cli::ParseOutcome;
 
 inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::string& error) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help") return ParseOutcome::kHelp;
-    if (arg == "--lockstep") {
-      options.lockstep = true;
-      continue;
-    }
-    if (arg != "--interface" && arg != "--node" && arg != "--duration" && arg != "--log" &&
-        arg != "--emulate-target" && arg != "--w-v") {
-      error = "unknown option '" + arg + "'";
-      return ParseOutcome::kError;
-    }
-    if (i + 1 >= argc) {
-      error = arg + " needs a value";
-      return ParseOutcome::kError;
-    }
-    const std::string value = argv[++i];
-    if (arg == "--interface") {
-      if (value.empty() || value.size() >= IFNAMSIZ) {
-        error = "--interface must be a name of 1.." + std::to_string(IFNAMSIZ - 1) +
-                " characters, got '" + value + "'";
-        return ParseOutcome::kError;
-      }
-      options.interface = value;
-    } else if (arg == "--node") {
-      char* end = nullptr;
-      const long node = std::strtol(value.c_str(), &end, 10);
-      if (value.empty() || *end != '\0' || node < 0 || node > forearm_protocol::kMaxNodeId) {
-        error = "--node must be an integer in 0.." + std::to_string(forearm_protocol::kMaxNodeId) +
-                ", got '" + value + "'";
-        return ParseOutcome::kError;
-      }
-      options.node = static_cast<forearm_protocol::NodeId>(node);
-    } else if (arg == "--duration") {
-      char* end = nullptr;
-      const double seconds = std::strtod(value.c_str(), &end);
-      if (value.empty() || *end != '\0' || !std::isfinite(seconds) || seconds <= 0 ||
-          seconds > kMaxDurationS) {
-        error = "--duration must be a number of seconds in (0, 1e6], got '" + value + "'";
-        return ParseOutcome::kError;
-      }
-      options.duration_s = seconds;
-    } else if (arg == "--w-v") {
-      double w = 0;
-      if (!cli::parse_number(value, 1e-6, 1, w)) {
-        error = cli::bad_value("--w-v", "a weight in [1e-6, 1]", value);
-        return ParseOutcome::kError;
-      }
-      options.w_v = w;
-    } else if (arg == "--emulate-target") {
-      if (value != "cortex-m7") {
-        error = "--emulate-target knows only 'cortex-m7', got '" + value + "'";
-        return ParseOutcome::kError;
-      }
-      options.emulate_cortex_m7 = true;
-    } else {
-      if (value.empty()) {
-        error = "--log needs a file name";
-        return ParseOutcome::kError;
-      }
-      options.log_path = value;
-    }
-  }
-  if (options.emulate_cortex_m7 && !options.lockstep) {
+  cli::OptionParser parser;
+  parser.text("--interface", [&](const std::string& v) -> std::string {
+    if (v.empty() || v.size() >= IFNAMSIZ)
+      return cli::bad_value("--interface", "a name of 1.." + std::to_string(IFNAMSIZ - 1) +
+                                               " characters", v);
+    options.interface = v;
+    return {};
+  });
+  parser.integer("--node", 0, forearm_protocol::kMaxNodeId, options.node);
+  parser.flag("--lockstep", options.lockstep);
+  parser.text("--emulate-target", [&](const std::string& v) -> std::string {
+    if (v != "cortex-m7") return cli::bad_value("--emulate-target", "cortex-m7", v);
+    options.emulate_cortex_m7 = true;
+    return {};
+  });
+  parser.number("--w-v", 1e-6, 1, "a weight in [1e-6, 1]", options.w_v);
+  parser.number("--duration", 1e-3, kMaxDurationS, "a number of seconds in [0.001, 1e6]",
+                options.duration_s);
+  parser.text("--log", [&](const std::string& v) -> std::string {
+    if (v.empty()) return "--log needs a file name";
+    options.log_path = v;
+    return {};
+  });
+  const ParseOutcome outcome = parser.parse(argc, argv, error);
+  if (outcome == ParseOutcome::kRun && options.emulate_cortex_m7 && !options.lockstep) {
     error = "--emulate-target needs --lockstep (in real time the solver's own time counts)";
     return ParseOutcome::kError;
   }
-  return ParseOutcome::kRun;
+  return outcome;
 }
 
 }  // namespace hmpc::linux_board
