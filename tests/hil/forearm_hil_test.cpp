@@ -109,7 +109,9 @@ TEST_F(ForearmHilStrategies, TwoStageHasTheLowestCostAndFine4msCostsMoreThanTheF
   const double fine4 = results_.at(Strategy::kFine4ms).accumulated_cost;
   for (const auto& [strategy, r] : results_) {
     SCOPED_TRACE(proto::value_name(proto::kStrategyValues, std::uint32_t(strategy)));
-    if (strategy != Strategy::kTwoStage) EXPECT_LT(two_stage, r.accumulated_cost);
+    if (strategy != Strategy::kTwoStage) {
+      EXPECT_LT(two_stage, r.accumulated_cost);
+    }
   }
   for (Strategy s : {Strategy::kFine8ms, Strategy::kCoarse20ms, Strategy::kTwoStage}) {
     EXPECT_GT(fine4, results_.at(s).accumulated_cost)
@@ -256,7 +258,9 @@ TEST(ForearmPlantNode, RealTimeModeIsPacedByTheClockAndReportsItsSpeed) {
   const double wall = std::stod(s.at("wall_seconds"));
   EXPECT_GE(wall, 0.49);  // paced by the clock, never faster
   EXPECT_NEAR(std::stod(s.at("real_time_factor")), 0.5 / wall, 0.01);
-  if (wall > 0.6) EXPECT_GT(std::stod(s.at("deadline_misses")), 0);
+  if (wall > 0.6) {
+    EXPECT_GT(std::stod(s.at("deadline_misses")), 0);
+  }
   EXPECT_EQ(double(lines_of(out + "/plant.csv")), 501);
 }
 
