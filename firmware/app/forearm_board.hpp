@@ -333,14 +333,27 @@ class ForearmBoard {
     return have_sensor_ && ticks_ - last_sensor_tick_ <= std::uint32_t(config_.sensor_timeout_ticks);
   }
 
-  // The host's trajectory clock now, extrapolated from the last heartbeat by board ticks.
+  // The host's trajectory clock now: board ticks plus the offset between the clocks.
   Scalar host_time() const {
-    return Scalar(last_host_time_us_) * Scalar(1e-6) + Scalar(ticks_ - last_heartbeat_tick_) * kTick;
+    return Scalar(std::uint32_t(1000u * ticks_ + host_offset_us_)) * Scalar(1e-6);
+  }
+
+  // Each heartbeat measures host time - board time, short by the heartbeat's latency, which
+  // jitters (by a tick or two in lock-step, more on a busy bus). The offset follows the
+  // largest measurement (the shortest latency) and falls back only beyond a deadband, so the
+  // target time does not jitter with the latency, yet a host clock that drifts or restarts is
+  // followed. Arithmetic modulo 2^32 us, as the host clock on the bus.
+  void track_host_clock(std::uint32_t host_time_us) {
+    constexpr std::int32_t kDeadbandUs = 3000;  // > the arrival jitter, < a control step
+    const std::uint32_t measured = host_time_us - 1000u * ticks_;
+    const std::int32_t change = std::int32_t(measured - host_offset_us_);
+    if (!have_host_offset_ || change > 0 || change < -kDeadbandUs) host_offset_us_ = measured;
+    have_host_offset_ = true;
   }
 
   void on_mode_command(const proto::ModeCommand& m) {
     last_heartbeat_tick_ = ticks_;
-    last_host_time_us_ = m.host_time_us;
+    track_host_clock(m.host_time_us);
     if (mode_ == proto::BoardMode::kFault) {
       if (m.mode == proto::RequestedMode::kIdle && m.clear_faults && sensor_fresh()) {
         faults_ = 0;
@@ -505,7 +518,8 @@ class ForearmBoard {
   std::uint32_t ticks_ = 0;
   std::uint32_t last_sensor_tick_ = 0;
   std::uint32_t last_heartbeat_tick_ = 0;
-  std::uint32_t last_host_time_us_ = 0;
+  std::uint32_t host_offset_us_ = 0;  // host clock - board clock, us modulo 2^32
+  bool have_host_offset_ = false;
   Scalar hold_angle_ = 0;
   typename Pid::State pid_state_{};
   Control plan_ = Control::Zero();

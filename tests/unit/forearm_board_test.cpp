@@ -40,6 +40,9 @@ double slow_clock() { return g_fake_seconds += 0.010; }
 struct StepOptions {
   bool heartbeat = true;  // the host's ModeCommand every 10 ms
   bool sensor = true;     // the plant's Sensor frame every tick
+  // Latency of the heartbeat in ticks, as f(tick it was sent): it is stamped when sent and
+  // reaches the board that many ticks later.
+  int (*heartbeat_delay)(std::uint64_t tick) = nullptr;
 };
 
 class Rig {
@@ -96,7 +99,21 @@ class Rig {
 
   // ---- one millisecond of host, plant and board ----
   void step(StepOptions options) {
-    if (options.heartbeat && tick_ % kHeartbeatPeriodTicks == 0) send_heartbeat();
+    if (options.heartbeat && tick_ % kHeartbeatPeriodTicks == 0) {
+      if (options.heartbeat_delay) {
+        proto::ModeCommand m = requested_;
+        m.host_time_us = now_us();
+        delayed_heartbeat_ = encode(host_, m);
+        heartbeat_due_ = tick_ + std::uint64_t(options.heartbeat_delay(tick_));
+        heartbeat_pending_ = true;
+      } else {
+        send_heartbeat();
+      }
+    }
+    if (heartbeat_pending_ && tick_ >= heartbeat_due_) {
+      deliver(delayed_heartbeat_);
+      heartbeat_pending_ = false;
+    }
     while (streaming_ && next_sample_us_ <= now_us() + kStreamLeadUs) {
       deliver(encode(host_, proto::TrajectorySample{float(theta_d(1e-6 * next_sample_us_)),
                                                     next_sample_us_, 0}));
@@ -163,6 +180,9 @@ class Rig {
   std::uint32_t next_sample_us_ = 0;
   proto::ActuatorCommand last_command_{};
   proto::BoardStatus last_status_{};
+  proto::Frame delayed_heartbeat_{};
+  std::uint64_t heartbeat_due_ = 0;
+  bool heartbeat_pending_ = false;
   int actuator_commands_ = 0;
   int status_frames_ = 0;
 };
@@ -517,6 +537,34 @@ TEST(ForearmBoard, EmulatedFastTargetKeepsTheFourMillisecondPeriod) {
   run_tracking(rig, 400, nullptr);
   EXPECT_EQ(rig.board().counters().mpc_steps - before, 100u);
   EXPECT_EQ(rig.board().counters().overruns, 0u);
+}
+
+// Heartbeats that arrive one or two ticks late (bus and scheduling jitter) must not move the
+// board's idea of the host's trajectory clock: the same run with and without the jitter
+// applies the same outputs at every tick.
+TEST(ForearmBoard, HeartbeatLatencyJitterDoesNotMoveTheTargetClock) {
+  const auto run = [](StepOptions options) {
+    Rig rig;
+    rig.run(20, options);
+    rig.command(RequestedMode::kHold);
+    rig.run(100, options);
+    rig.stream_sinusoid();
+    rig.command(RequestedMode::kRun, Strategy::kTwoStage);
+    std::vector<float> v_m;
+    for (int i = 0; i < 600; ++i) {
+      rig.run(1, options);
+      v_m.push_back(rig.last_command().v_m);
+    }
+    EXPECT_EQ(rig.board().mode(), BoardMode::kRun);
+    return v_m;
+  };
+  StepOptions jittered;
+  jittered.heartbeat_delay = [](std::uint64_t tick) { return int((tick / 10) % 3 == 1 ? 2 : 1); };
+  StepOptions steady;
+  steady.heartbeat_delay = [](std::uint64_t) { return 1; };
+  const std::vector<float> a = run(steady), b = run(jittered);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "tick " << i;
 }
 
 }  // namespace
