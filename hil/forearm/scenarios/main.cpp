@@ -337,11 +337,14 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
           "lines title 'motor'\n";
   }
   if (o.weight_sweep) {
+    // One block per strategy, so that gnuplot joins each strategy's points.
     std::ofstream data(out + "/hil_weight_sweep.dat");
-    for (const Group& g : groups(rows)) {
-      if (g.w_v <= 0) continue;
-      const Stats s = group_stats(g, [](const HilRunResult& r) { return r.accumulated_cost; });
-      data << g.strategy << " " << g.w_v << " " << s.mean << " " << s.stddev << "\n";
+    for (const char* strategy : {"fine_4ms", "coarse_20ms", "two_stage"}) {
+      for (const Group& g : groups(rows)) {
+        if (g.w_v <= 0 || g.strategy != strategy) continue;
+        const Stats s = group_stats(g, [](const HilRunResult& r) { return r.accumulated_cost; });
+        data << g.strategy << " " << g.w_v << " " << s.mean << " " << s.stddev << "\n";
+      }
     }
     gp << "set output '" << out << "/hil_weight_sweep.png'\nset datafile separator ' '\n"
           "set title 'Accumulated cost at 1 Hz for three voltage weights w_v (cf. Fig. 3.4)'\n"
