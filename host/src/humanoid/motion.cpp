@@ -230,14 +230,17 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   CostWeights& weights = motion.weights;
   weights.control = {reader.weight(w, "w_HAA"), reader.weight(w, "w_HFE"), reader.weight(w, "w_KFE"),
                      reader.weight(w, "w_AFE")};
-  weights.attitude << reader.weight(w, "w_q1"), reader.weight(w, "w_q2"), reader.weight(w, "w_q3"),
-      reader.weight(w, "w_q4");
+  // Element by element: a missing key throws, which must not leave an Eigen comma
+  // initializer half done, and keys are reported in file order.
+  for (int i = 0; i < 4; ++i) weights.attitude(i) = reader.weight(w, "w_q" + std::to_string(i + 1));
   weights.height = reader.weight(w, "w_height");
-  weights.velocity << reader.weight(w, "w_vx"), reader.weight(w, "w_vy"), reader.weight(w, "w_vz");
+  const char* const axes[] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) weights.velocity(i) = reader.weight(w, std::string("w_v") + axes[i]);
   weights.alpha = reader.weight(w, "w_alpha");
   weights.beta = reader.weight(w, "w_beta");
-  weights.angular_velocity << reader.weight(w, "w_omega_x"), reader.weight(w, "w_omega_y"),
-      reader.weight(w, "w_omega_z");
+  for (int i = 0; i < 3; ++i) {
+    weights.angular_velocity(i) = reader.weight(w, std::string("w_omega_") + axes[i]);
+  }
   weights.fast = reader.weight(w, "w_fast");
   weights.fast_control = reader.weight(w, "w_fast_control");
   return motion;

@@ -60,7 +60,8 @@ class Dynamics {
   std::array<Vector6, kBodies> velocity_, acceleration_, force_;
   std::array<Matrix6, kBodies> composite_;
   MassMatrix mass_matrix_;
-  Eigen::LLT<MassMatrix> cholesky_;
+  // Factorised once at construction, so that a copy never reads an uninitialised state.
+  Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
 };
 
 }  // namespace hmpc::humanoid

@@ -88,8 +88,10 @@ class StepMap {
   Kinematics kinematics_;
   ContactState contact_state_;
   MassMatrix iteration_matrix_;
-  Eigen::LLT<MassMatrix> cholesky_;
-  Eigen::LLT<Eigen::Matrix<double, kJoints, kJoints>> leg_cholesky_;
+  // Factorised once at construction, so that a copy never reads an uninitialised state.
+  Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
+  Eigen::LLT<Eigen::Matrix<double, kJoints, kJoints>> leg_cholesky_{
+      Eigen::Matrix<double, kJoints, kJoints>::Identity()};
 };
 
 }  // namespace hmpc::humanoid
