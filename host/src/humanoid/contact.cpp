@@ -104,17 +104,32 @@ Vector3 ContactModel::point_force(double gap, const Vector3& velocity, double sc
 
 void ContactModel::evaluate(const Kinematics& kinematics, const Velocity& v, ContactState& out) const {
   out.count = contact_.chair ? kContactPoints : kSolePoints;
-  for (int i = 0; i < out.count; ++i) {
-    const ContactPoint& point = points_[i];
-    const Vector3 p = kinematics.position[point.body] + kinematics.rotation[point.body] * point.local;
-    out.jacobian[i] = point_jacobian(model_, kinematics, point.body, point.local);
-    out.position[i] = p;
-    out.velocity[i] = out.jacobian[i] * v;
-    const bool seat = i >= kSolePoints;
-    const double gap = seat ? p.z() - contact_.seat_height : p.z();
-    const double scale = seat ? seat_window(p.x()) : 1.0;
-    out.force[i] = point_force(gap, out.velocity[i], scale, &out.force_velocity[i]);
-  }
+  for (int i = 0; i < out.count; ++i) evaluate_point(i, kinematics, v, out);
+}
+
+void ContactModel::evaluate_point(int i, const Kinematics& kinematics, const Velocity& v,
+                                  ContactState& out) const {
+  const ContactPoint& point = points_[i];
+  const Vector3 p = kinematics.position[point.body] + kinematics.rotation[point.body] * point.local;
+  out.jacobian[i] = point_jacobian(model_, kinematics, point.body, point.local);
+  out.position[i] = p;
+  out.velocity[i] = out.jacobian[i] * v;
+  out.force[i] = force_at(i, p, out.velocity[i], out.force_velocity[i]);
+}
+
+Vector3 ContactModel::force_at(int i, const Vector3& position, const Vector3& velocity,
+                               Matrix3& dforce) const {
+  const bool seat = i >= kSolePoints;
+  const double gap = seat ? position.z() - contact_.seat_height : position.z();
+  const double scale = seat ? seat_window(position.x()) : 1.0;
+  return point_force(gap, velocity, scale, &dforce);
+}
+
+bool ContactModel::moves_with(int i, int body) const {
+  // A parent is numbered below its children (model.hpp).
+  int b = points_[i].body;
+  while (b > body) b = model_.bodies[b].parent;
+  return b == body;
 }
 
 Velocity ContactModel::generalized_force(const ContactState& state) {

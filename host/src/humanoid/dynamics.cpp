@@ -50,6 +50,27 @@ Matrix6 spatial_inertia(double m, const Vector3& c, const Matrix3& inertia_com) 
 
 constexpr int dof_of(int body) { return kBaseDofs + body - 1; }
 
+// The forward pass of kinematics() given each body's rotation relative to its parent (to the
+// world for the torso).
+void kinematics_from_rotations(const Model& model, const std::array<Matrix3, kBodies>& rotation,
+                               const Vector3& base_position, const Velocity& v, Kinematics& out) {
+  out.rotation[0] = rotation[0];
+  out.position[0] = base_position;
+  out.velocity[0] = v.head<6>();
+  for (int i = 1; i < kBodies; ++i) {
+    const Body& b = model.bodies[i];
+    const Matrix3& joint_rotation = rotation[i];
+    out.rotation[i] = out.rotation[b.parent] * joint_rotation;
+    out.position[i] = out.position[b.parent] + out.rotation[b.parent] * b.joint_origin;
+    // Body velocity: the parent's velocity moved to the joint, rotated into the body frame,
+    // plus the joint rate about the axis.
+    const Vector3 omega = out.velocity[b.parent].head<3>();
+    const Vector3 v_joint = out.velocity[b.parent].tail<3>() + omega.cross(b.joint_origin);
+    out.velocity[i].head<3>() = joint_rotation.transpose() * omega + b.axis * v[dof_of(i)];
+    out.velocity[i].tail<3>() = joint_rotation.transpose() * v_joint;
+  }
+}
+
 }  // namespace
 
 Dynamics::Dynamics(const Model& model) : model_(model) {
@@ -63,7 +84,8 @@ Dynamics::Dynamics(const Model& model) : model_(model) {
   mass_matrix_.setZero();
 }
 
-void Dynamics::update_transforms(const Configuration& q) {
+void Dynamics::set_configuration(const Configuration& q) {
+  configuration_ = q;
   // Floating base: q = (p, quaternion w x y z); the world-to-torso transform has E = R^T.
   const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
   transform_[0] = motion_transform(orientation.normalized().toRotationMatrix().transpose(),
@@ -77,7 +99,11 @@ void Dynamics::update_transforms(const Configuration& q) {
 }
 
 const MassMatrix& Dynamics::mass_matrix(const Configuration& q) {
-  update_transforms(q);
+  set_configuration(q);
+  return mass_matrix();
+}
+
+const MassMatrix& Dynamics::mass_matrix() {
   // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X.
   for (int i = 0; i < kBodies; ++i) composite_[i] = inertia_[i];
   for (int i = kBodies - 1; i > 0; --i) {
@@ -108,7 +134,11 @@ const MassMatrix& Dynamics::mass_matrix(const Configuration& q) {
 }
 
 Velocity Dynamics::inverse_dynamics(const Configuration& q, const Velocity& v, const Velocity& a) {
-  update_transforms(q);
+  set_configuration(q);
+  return inverse_dynamics(v, a);
+}
+
+Velocity Dynamics::inverse_dynamics(const Velocity& v, const Velocity& a) {
   // Gravity as a fictitious upward acceleration of the world: a_world = -(0, g).
   Vector6 world_acceleration;
   world_acceleration << Vector3::Zero(), -model_.gravity;
@@ -148,22 +178,18 @@ Velocity Dynamics::forward_dynamics(const Configuration& q, const Velocity& v, c
 }
 
 void Dynamics::kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const {
-  const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
-  out.rotation[0] = orientation.normalized().toRotationMatrix();
-  out.position[0] = q.head<3>();
-  out.velocity[0] = v.head<6>();
-  for (int i = 1; i < kBodies; ++i) {
-    const Body& b = model_.bodies[i];
-    const Matrix3 joint_rotation = Eigen::AngleAxisd(q[7 + i - 1], b.axis).toRotationMatrix();
-    out.rotation[i] = out.rotation[b.parent] * joint_rotation;
-    out.position[i] = out.position[b.parent] + out.rotation[b.parent] * b.joint_origin;
-    // Body velocity: the parent's velocity moved to the joint, rotated into the body frame,
-    // plus the joint rate about the axis.
-    const Vector3 omega = out.velocity[b.parent].head<3>();
-    const Vector3 v_joint = out.velocity[b.parent].tail<3>() + omega.cross(b.joint_origin);
-    out.velocity[i].head<3>() = joint_rotation.transpose() * omega + b.axis * v[dof_of(i)];
-    out.velocity[i].tail<3>() = joint_rotation.transpose() * v_joint;
-  }
+  std::array<Matrix3, kBodies> rotation;
+  rotation[0] = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
+  for (int i = 1; i < kBodies; ++i)
+    rotation[i] = Eigen::AngleAxisd(q[7 + i - 1], model_.bodies[i].axis).toRotationMatrix();
+  kinematics_from_rotations(model_, rotation, q.head<3>(), v, out);
+}
+
+void Dynamics::kinematics(const Velocity& v, Kinematics& out) const {
+  // The transforms hold E = the transposed rotations (set_configuration()).
+  std::array<Matrix3, kBodies> rotation;
+  for (int i = 0; i < kBodies; ++i) rotation[i] = transform_[i].topLeftCorner<3, 3>().transpose();
+  kinematics_from_rotations(model_, rotation, configuration_.head<3>(), v, out);
 }
 
 }  // namespace hmpc::humanoid

@@ -4,28 +4,81 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hmpc/solver/finite_difference.hpp"
+
 namespace hmpc::humanoid {
+namespace {
+
+constexpr int kFirstJoint = kConfigurationSize - kJoints;  // q index of the first joint angle
+
+// (S2): q moved over h by the new velocity v.
+void move_configuration(Configuration& q, const Velocity& v, double h) {
+  const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
+  q.head<3>() += h * (orientation.normalized().toRotationMatrix() * v.segment<3>(3));
+  // exp of the rotation vector theta = h omega: (cos(|theta|/2), sin(|theta|/2) theta/|theta|);
+  // sin(a)/a by its Taylor series near 0, where the quotient loses all digits.
+  const Vector3 theta = h * v.head<3>();
+  const double half_angle = 0.5 * theta.norm();
+  const double sinc = half_angle < 1e-4 ? 1.0 - half_angle * half_angle / 6.0
+                                        : std::sin(half_angle) / half_angle;
+  const Vector3 axis_part = 0.5 * sinc * theta;
+  const Eigen::Quaterniond increment(std::cos(half_angle), axis_part.x(), axis_part.y(), axis_part.z());
+  const Eigen::Quaterniond rotated = (orientation * increment).normalized();
+  q[3] = rotated.w();
+  q[4] = rotated.x();
+  q[5] = rotated.y();
+  q[6] = rotated.z();
+  q.tail<kJoints>() += h * v.tail<kJoints>();
+}
+
+// The rotation guard's rate: the torso's |omega| or the fastest joint's.
+double guard_rate(const Velocity& v) {
+  return std::max(v.head<3>().norm(), v.tail<kJoints>().cwiseAbs().maxCoeff());
+}
+
+// d guard_rate / dv (where one rate is the largest).
+Eigen::Matrix<double, 1, kDofs> guard_rate_gradient(const Velocity& v) {
+  Eigen::Matrix<double, 1, kDofs> gradient = Eigen::Matrix<double, 1, kDofs>::Zero();
+  int joint = 0;
+  const double joint_rate = v.tail<kJoints>().cwiseAbs().maxCoeff(&joint);
+  const double omega = v.head<3>().norm();
+  if (omega >= joint_rate) {
+    gradient.head<3>() = v.head<3>().transpose() / omega;
+  } else {
+    gradient[kBaseDofs + joint] = v[kBaseDofs + joint] > 0.0 ? 1.0 : -1.0;
+  }
+  return gradient;
+}
+
+// The body whose joint entry i of q (v) moves: its own for a joint, the torso for the base.
+int moved_body_of_configuration(int i) { return i < kFirstJoint ? 0 : i - kFirstJoint + 1; }
+int moved_body_of_velocity(int i) { return i < kBaseDofs ? 0 : i - kBaseDofs + 1; }
+
+// One point's term J^T (f + h D J a) of (L2)'s sum.
+Velocity contact_term(const PointJacobian& J, const Vector3& force, const Matrix3& dforce,
+                      const Velocity& a, double h) {
+  return J.transpose() * (force + h * dforce * (J * a));
+}
+
+// Forward-difference step for x_i: sqrt(eps), scaled like the reference's central one
+// (finite_difference.hpp).
+double forward_step(double xi) { return detail::fd_step(xi, 0.5); }
+
+}  // namespace
 
 StepMap::StepMap(const Model& model, const Parameters& parameters, const ContactParameters& contact,
                  double max_substep)
     : dynamics_(model), contact_(model, parameters, contact), max_substep_(max_substep) {}
 
 const ContactState& StepMap::evaluate_contact(const State& x) {
-  dynamics_.kinematics(x.q, x.v, kinematics_);
+  dynamics_.set_configuration(x.q);
+  dynamics_.kinematics(x.v, kinematics_);
   contact_.evaluate(kinematics_, x.v, contact_state_);
   return contact_state_;
 }
 
-State StepMap::step(const State& x, const JointVector& tau, double dt, const Velocity& external) {
-  return advance(x, tau, dt, external, false);
-}
-
-State StepMap::step_legs(const State& x, const JointVector& tau, double dt) {
-  return advance(x, tau, dt, Velocity::Zero(), true);
-}
-
-State StepMap::advance(const State& x, const JointVector& tau, double dt, const Velocity& external,
-                       bool base_held) {
+template <class Substep>
+State StepMap::advance(const State& x, double dt, const Substep& substep) const {
   const int substeps = std::max(1, static_cast<int>(std::ceil(dt / max_substep_ - 1e-9)));
   const double nominal = dt / substeps;
   State next = x;
@@ -33,54 +86,284 @@ State StepMap::advance(const State& x, const JointVector& tau, double dt, const 
   while (remaining > 0.0) {
     // The rotation guard (step.hpp): shorten the sub-step so no body turns more than
     // kMaxRotation relative to its parent or the world; a non-finite rate keeps `nominal`.
-    const double rate = std::max(next.v.head<3>().norm(), next.v.tail<kJoints>().cwiseAbs().maxCoeff());
-    double h = nominal;
-    if (rate * h > kMaxRotation) h = std::max(kMaxRotation / rate, nominal / kMaxRefinement);
+    const double rate = guard_rate(next.v);
+    SubStep sub{nominal, SubStep::kFixed};
+    if (rate * nominal > kMaxRotation) {
+      const double guarded = kMaxRotation / rate, floor = nominal / kMaxRefinement;
+      sub = guarded < floor ? SubStep{floor, SubStep::kFixed} : SubStep{guarded, SubStep::kGuarded};
+    }
     // Finish dt exactly, without leaving a sliver for a last, tiny sub-step.
-    if (remaining < 1.5 * h) h = remaining;
-    substep(next, tau, h, external, base_held);
-    remaining -= h;
+    if (remaining < 1.5 * sub.h) sub = SubStep{remaining, SubStep::kRemainder};
+    substep(next, sub);
+    remaining -= sub.h;
   }
   return next;
 }
 
-void StepMap::substep(State& x, const JointVector& tau, double h, const Velocity& external,
-                      bool base_held) {
+State StepMap::step(const State& x, const JointVector& tau, double dt, const Velocity& external) {
+  return advance(x, dt, [&](State& s, const SubStep& sub) { substep(s, tau, sub.h, external, false); });
+}
+
+State StepMap::step_legs(const State& x, const JointVector& tau, double dt) {
+  return advance(x, dt,
+                 [&](State& s, const SubStep& sub) { substep(s, tau, sub.h, Velocity::Zero(), true); });
+}
+
+// The sub-step lengths' derivatives: zero for a fixed length, -h / rate d rate for the
+// guard's kMaxRotation / rate, and for the remainder minus the derivative of the time
+// elapsed before it.
+State StepMap::linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
+                         StepControlJacobian& fu) {
+  fx.setIdentity();
+  fu.setZero();
+  StateRow elapsed_x = StateRow::Zero();
+  ControlRow elapsed_u = ControlRow::Zero();
+  return advance(x, dt, [&](State& s, const SubStep& sub) {
+    StateRow dh_x = StateRow::Zero();
+    ControlRow dh_u = ControlRow::Zero();
+    if (sub.rule == SubStep::kGuarded) {
+      const Eigen::Matrix<double, 1, kDofs> drate = -sub.h / guard_rate(s.v) * guard_rate_gradient(s.v);
+      dh_x.noalias() = drate * fx.bottomRows<kDofs>();
+      dh_u.noalias() = drate * fu.bottomRows<kDofs>();
+    } else if (sub.rule == SubStep::kRemainder) {
+      dh_x = -elapsed_x;
+      dh_u = -elapsed_u;
+    }
+    linearised_substep(s, tau, sub.h, dh_x, dh_u, fx, fu);
+    elapsed_x += dh_x;
+    elapsed_u += dh_u;
+  });
+}
+
+State StepMap::linearise_legs(const State& x, const JointVector& tau, double dt,
+                              LegStepJacobian& fz, LegControlJacobian& fu) {
+  fz.setIdentity();
+  fu.setZero();
+  LegStateRow elapsed_z = LegStateRow::Zero();
+  ControlRow elapsed_u = ControlRow::Zero();
+  return advance(x, dt, [&](State& s, const SubStep& sub) {
+    LegStateRow dh_z = LegStateRow::Zero();
+    ControlRow dh_u = ControlRow::Zero();
+    if (sub.rule == SubStep::kGuarded) {
+      // The base's rates are held, so only the joints' enter.
+      const Eigen::Matrix<double, 1, kJoints> drate =
+          -sub.h / guard_rate(s.v) * guard_rate_gradient(s.v).tail<kJoints>();
+      dh_z.noalias() = drate * fz.bottomRows<kJoints>();
+      dh_u.noalias() = drate * fu.bottomRows<kJoints>();
+    } else if (sub.rule == SubStep::kRemainder) {
+      dh_z = -elapsed_z;
+      dh_u = -elapsed_u;
+    }
+    linearised_leg_substep(s, tau, sub.h, dh_z, dh_u, fz, fu);
+    elapsed_z += dh_z;
+    elapsed_u += dh_u;
+  });
+}
+
+Velocity StepMap::acceleration(const State& x, const JointVector& tau, double h,
+                               const Velocity& external, bool base_held) {
+  // evaluate_contact() also sets the dynamics' configuration for M and c.
   const ContactState& contact = evaluate_contact(x);
-  // (S1). bias_forces and mass_matrix both refresh the dynamics' transforms from q.
-  Velocity rhs = external - dynamics_.bias_forces(x.q, x.v) + ContactModel::generalized_force(contact);
+  Velocity rhs = external - dynamics_.inverse_dynamics(x.v, Velocity::Zero()) +
+                 ContactModel::generalized_force(contact);
   rhs.tail<kJoints>() += tau;
-  iteration_matrix_ = dynamics_.mass_matrix(x.q);
+  iteration_matrix_ = dynamics_.mass_matrix();
   for (int i = 0; i < contact.count; ++i) {
     iteration_matrix_.noalias() -=
         h * contact.jacobian[i].transpose() * contact.force_velocity[i] * contact.jacobian[i];
   }
+  Velocity a = Velocity::Zero();
   if (base_held) {
     leg_cholesky_.compute(iteration_matrix_.bottomRightCorner<kJoints, kJoints>());
-    x.v.tail<kJoints>() += h * leg_cholesky_.solve(rhs.tail<kJoints>());
+    a.tail<kJoints>() = leg_cholesky_.solve(rhs.tail<kJoints>());
+  } else {
+    cholesky_.compute(iteration_matrix_);
+    a = cholesky_.solve(rhs);
+  }
+  return a;
+}
+
+void StepMap::substep(State& x, const JointVector& tau, double h, const Velocity& external,
+                      bool base_held) {
+  const Velocity a = acceleration(x, tau, h, external, base_held);
+  if (base_held) {
+    x.v.tail<kJoints>() += h * a.tail<kJoints>();
     x.q.tail<kJoints>() += h * x.v.tail<kJoints>();
     return;
   }
-  cholesky_.compute(iteration_matrix_);
-  x.v += h * cholesky_.solve(rhs);
+  x.v += h * a;
+  move_configuration(x.q, x.v, h);
+}
 
-  // (S2).
-  const Eigen::Quaterniond orientation(x.q[3], x.q[4], x.q[5], x.q[6]);
-  x.q.head<3>() += h * (orientation.normalized().toRotationMatrix() * x.v.segment<3>(3));
-  // exp of the rotation vector theta = h omega: (cos(|theta|/2), sin(|theta|/2) theta/|theta|);
-  // sin(a)/a by its Taylor series near 0, where the quotient loses all digits.
-  const Vector3 theta = h * x.v.head<3>();
-  const double half_angle = 0.5 * theta.norm();
-  const double sinc = half_angle < 1e-4 ? 1.0 - half_angle * half_angle / 6.0
-                                        : std::sin(half_angle) / half_angle;
-  const Vector3 axis_part = 0.5 * sinc * theta;
-  const Eigen::Quaterniond increment(std::cos(half_angle), axis_part.x(), axis_part.y(), axis_part.z());
-  const Eigen::Quaterniond rotated = (orientation * increment).normalized();
-  x.q[3] = rotated.w();
-  x.q[4] = rotated.x();
-  x.q[5] = rotated.y();
-  x.q[6] = rotated.z();
+void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int first_q,
+                                int q_count, int first_v, int v_count) {
+  const int points = contact_state_.count;
+  damping_acceleration_.setZero();
+  for (int k = 0; k < points; ++k) {
+    const PointJacobian& J = contact_state_.jacobian[k];
+    damping_acceleration_.noalias() += J.transpose() * (contact_state_.force_velocity[k] * (J * a));
+    contact_terms_[k] = contact_term(J, contact_state_.force[k], contact_state_.force_velocity[k], a, h);
+  }
+  const Velocity dynamics_term = dynamics_.inverse_dynamics(x.v, a);
+
+  // Columns by forward differences, r(x + d e_i) - r(x) over d. First v's, while
+  // contact_state_ and the dynamics are at x's q: J is kept, and only the points carried by
+  // the entry's joint change velocity.
+  for (int j = 0; j < v_count; ++j) {
+    const int i = first_v + j;
+    const double d = forward_step(x.v[i]);
+    Velocity v = x.v;
+    v[i] += d;
+    Velocity change = dynamics_term - dynamics_.inverse_dynamics(v, a);
+    for (int k = 0; k < points; ++k) {
+      if (!contact_.moves_with(k, moved_body_of_velocity(i))) continue;
+      const PointJacobian& J = contact_state_.jacobian[k];
+      Matrix3 dforce;
+      const Vector3 force = contact_.force_at(k, contact_state_.position[k], J * v, dforce);
+      change += contact_term(J, force, dforce, a, h) - contact_terms_[k];
+    }
+    residual_jacobian_.col(q_count + j) = change / d;
+  }
+  // Then q's. A base translation (q's first three entries, which come first) moves every
+  // point by the same offset and changes neither M, c (gravity is uniform) nor J; any other
+  // entry moves the points its joint carries (every point for the quaternion), which are
+  // evaluated anew into contact_state_.
+  for (int j = 0; j < q_count; ++j) {
+    const int i = first_q + j;
+    const double d = forward_step(x.q[i]);
+    Velocity change = Velocity::Zero();
+    if (i < 3) {
+      for (int k = 0; k < points; ++k) {
+        Matrix3 dforce;
+        const Vector3 force = contact_.force_at(k, contact_state_.position[k] + d * Vector3::Unit(i),
+                                                contact_state_.velocity[k], dforce);
+        change += contact_term(contact_state_.jacobian[k], force, dforce, a, h) - contact_terms_[k];
+      }
+    } else {
+      Configuration q = x.q;
+      q[i] += d;
+      dynamics_.set_configuration(q);
+      dynamics_.kinematics(x.v, kinematics_);
+      change = dynamics_term - dynamics_.inverse_dynamics(x.v, a);
+      for (int k = 0; k < points; ++k) {
+        if (!contact_.moves_with(k, moved_body_of_configuration(i))) continue;
+        contact_.evaluate_point(k, kinematics_, x.v, contact_state_);
+        change += contact_term(contact_state_.jacobian[k], contact_state_.force[k],
+                               contact_state_.force_velocity[k], a, h) -
+                  contact_terms_[k];
+      }
+    }
+    residual_jacobian_.col(j) = change / d;
+  }
+}
+
+void StepMap::linearised_substep(State& x, const JointVector& tau, double h, const StateRow& dh_x,
+                                 const ControlRow& dh_u, StepJacobian& fx, StepControlJacobian& fu) {
+  const Velocity a = acceleration(x, tau, h, Velocity::Zero(), false);
+  residual_jacobian(x, a, h, 0, kConfigurationSize, 0, kDofs);
+  // (L1) and the derivative of v+ = v + h a with A = M - h sum J^T D J in h:
+  // [dv+/dx, dv+/dtau, dv+/dh] = h A^-1 [dr/dx, S^T, sum J^T D J a] + [(0 1), 0, a].
+  constexpr int kColumns = kStateSize + kJoints + 1;
+  Eigen::Matrix<double, kDofs, kColumns> velocity;
+  velocity.leftCols<kStateSize>() = residual_jacobian_;
+  velocity.middleCols<kJoints>(kStateSize).setZero();
+  velocity.block<kJoints, kJoints>(kBaseDofs, kStateSize).setIdentity();
+  velocity.col(kColumns - 1) = damping_acceleration_;
+  cholesky_.solveInPlace(velocity);
+  velocity *= h;
+  velocity.middleCols<kDofs>(kConfigurationSize) += MassMatrix::Identity();
+  velocity.col(kColumns - 1) += a;
+
+  const Configuration q = x.q;
+  x.v += h * a;
+  move_configuration(x.q, x.v, h);
+  // (S2)'s derivatives: q+ = q + G (dq, dv+, dh) with G the identity in p and the joints plus
+  // dp+/dquaternion and dquaternion+/dquaternion (rows of p and the quaternion), h R on v_o+,
+  // dquaternion+/domega+ and h on the joint rates. The quaternion's and omega+'s by central
+  // differences of (S2) alone; (S2) depends on h and v+ through h v+ only, so at fixed v+
+  // dq+/dh = (dq+/dv+) v+ / h.
+  Eigen::Matrix<double, 7, 4> by_quaternion;  // d(p+, quaternion+)/dquaternion - identity
+  for (int k = 0; k < 4; ++k) {
+    const double d = detail::fd_step(q[3 + k], 1.0 / 3.0);
+    Configuration plus = q, minus = q;
+    plus[3 + k] += d;
+    minus[3 + k] -= d;
+    move_configuration(plus, x.v, h);
+    move_configuration(minus, x.v, h);
+    by_quaternion.col(k) = (plus - minus).head<7>() / (2.0 * d);
+  }
+  by_quaternion.bottomRows<4>() -= Eigen::Matrix4d::Identity();
+  Eigen::Matrix<double, 4, 3> by_omega;  // dquaternion+/domega+
+  for (int k = 0; k < 3; ++k) {
+    const double d = detail::fd_step(x.v[k], 1.0 / 3.0);
+    Velocity v_plus = x.v, v_minus = x.v;
+    v_plus[k] += d;
+    v_minus[k] -= d;
+    Configuration plus = q, minus = q;
+    move_configuration(plus, v_plus, h);
+    move_configuration(minus, v_minus, h);
+    by_omega.col(k) = (plus - minus).segment<4>(3) / (2.0 * d);
+  }
+  const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
+  const Matrix3 by_velocity = h * orientation.normalized().toRotationMatrix();  // dp+/dv_o+
+  Configuration by_length;  // dq+/dh at fixed v+
+  by_length.head<3>() = by_velocity * x.v.segment<3>(3) / h;
+  by_length.segment<4>(3) = by_omega * x.v.head<3>() / h;
+  by_length.tail<kJoints>() = x.v.tail<kJoints>();
+
+  // The chain rule, F <- dx+/dx F + dx+/dh dh (+ dx+/dtau for fu), with F the derivative of
+  // the sub-step's start x in the step's start (fx) or torques (fu): v+'s rows by (L1) first,
+  // then q+'s from them by (S2)'s sparse G.
+  Eigen::Matrix<double, kDofs, kJoints> fu_velocity = velocity.middleCols<kJoints>(kStateSize);
+  fu_velocity.noalias() += velocity.leftCols<kStateSize>() * fu;
+  fu_velocity.noalias() += velocity.col(kColumns - 1) * dh_u;
+  Eigen::Matrix<double, kDofs, kStateSize> fx_velocity;
+  fx_velocity.noalias() = velocity.leftCols<kStateSize>() * fx;
+  fx_velocity.noalias() += velocity.col(kColumns - 1) * dh_x;
+  const auto chain = [&](auto& F, const auto& velocity_rows, const auto& dh) {
+    F.template topRows<7>() += (by_quaternion * F.template middleRows<4>(3)).eval();
+    F.template bottomRows<kDofs>() = velocity_rows;
+    F.template topRows<3>().noalias() += by_velocity * velocity_rows.template middleRows<3>(3);
+    F.template middleRows<4>(3).noalias() += by_omega * velocity_rows.template topRows<3>();
+    F.template middleRows<kJoints>(kFirstJoint) += h * velocity_rows.template bottomRows<kJoints>();
+    F.template topRows<kConfigurationSize>().noalias() += by_length * dh;
+  };
+  chain(fu, fu_velocity, dh_u);
+  chain(fx, fx_velocity, dh_x);
+}
+
+void StepMap::linearised_leg_substep(State& x, const JointVector& tau, double h,
+                                     const LegStateRow& dh_z, const ControlRow& dh_u,
+                                     LegStepJacobian& fz, LegControlJacobian& fu) {
+  const Velocity a = acceleration(x, tau, h, Velocity::Zero(), true);
+  residual_jacobian(x, a, h, kFirstJoint, kJoints, kBaseDofs, kJoints);
+  // (L1) on the leg rows, as in linearised_substep with A22 for A.
+  using LegMatrix = Eigen::Matrix<double, kJoints, kJoints>;
+  constexpr int kColumns = kLegStateSize + kJoints + 1;
+  Eigen::Matrix<double, kJoints, kColumns> velocity;
+  velocity.leftCols<kLegStateSize>() = residual_jacobian_.bottomLeftCorner<kJoints, kLegStateSize>();
+  velocity.middleCols<kJoints>(kLegStateSize).setIdentity();
+  velocity.col(kColumns - 1) = damping_acceleration_.tail<kJoints>();
+  leg_cholesky_.solveInPlace(velocity);
+  velocity *= h;
+  velocity.middleCols<kJoints>(kJoints) += LegMatrix::Identity();
+  velocity.col(kColumns - 1) += a.tail<kJoints>();
+
+  x.v.tail<kJoints>() += h * a.tail<kJoints>();
   x.q.tail<kJoints>() += h * x.v.tail<kJoints>();
+  // z+ = (q_leg + h v_leg+, v_leg+).
+  LegStepJacobian phi;
+  phi.topRows<kJoints>() = h * velocity.leftCols<kLegStateSize>();
+  phi.topLeftCorner<kJoints, kJoints>() += LegMatrix::Identity();
+  phi.bottomRows<kJoints>() = velocity.leftCols<kLegStateSize>();
+  LegControlJacobian phi_u;
+  phi_u.topRows<kJoints>() = h * velocity.middleCols<kJoints>(kLegStateSize);
+  phi_u.bottomRows<kJoints>() = velocity.middleCols<kJoints>(kLegStateSize);
+  Eigen::Matrix<double, kLegStateSize, 1> dz_dh;
+  dz_dh.head<kJoints>() = x.v.tail<kJoints>() + h * velocity.col(kColumns - 1);
+  dz_dh.tail<kJoints>() = velocity.col(kColumns - 1);
+  fu = phi * fu + phi_u + dz_dh * dh_u;
+  fz = phi * fz + dz_dh * dh_z;
 }
 
 }  // namespace hmpc::humanoid

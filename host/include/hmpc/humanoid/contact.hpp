@@ -104,6 +104,14 @@ class ContactModel {
   // Positions, Jacobians, velocities, forces and their velocity derivatives at (q, v), from
   // kinematics computed at the same state.
   void evaluate(const Kinematics& kinematics, const Velocity& v, ContactState& out) const;
+  // The same for point i only (out's entries i).
+  void evaluate_point(int i, const Kinematics& kinematics, const Velocity& v, ContactState& out) const;
+  // Force on point i at a world position and velocity, and its velocity derivative (as
+  // point_force's).
+  Vector3 force_at(int i, const Vector3& position, const Vector3& velocity, Matrix3& dforce) const;
+  // Whether point i is carried by `body` (fixed on it or on a descendant), so moves with its
+  // joint.
+  bool moves_with(int i, int body) const;
 
   // sum_i J_i^T f_i: the contact's generalized force, in model.hpp's v coordinates (first six
   // entries the moment about the torso origin and the force, torso coordinates).

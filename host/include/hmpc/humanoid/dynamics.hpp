@@ -42,6 +42,15 @@ class Dynamics {
   const MassMatrix& mass_matrix(const Configuration& q);
   // RNEA: tau = M(q) a + c(q, v).
   Velocity inverse_dynamics(const Configuration& q, const Velocity& v, const Velocity& a);
+
+  // The same two at the configuration of the last set_configuration() (or of any call above
+  // that takes q), without recomputing its joint transforms: the step map's linearisation
+  // evaluates many (v, a) and one M at each q.
+  void set_configuration(const Configuration& q);
+  const MassMatrix& mass_matrix();
+  Velocity inverse_dynamics(const Velocity& v, const Velocity& a);
+  // kinematics(q, v, out) at that configuration, with the same numbers and no trigonometry.
+  void kinematics(const Velocity& v, Kinematics& out) const;
   // c(q, v) = RNEA with a = 0.
   Velocity bias_forces(const Configuration& q, const Velocity& v);
   // a = M^-1 (tau - c), by Cholesky (LLT) of M.
@@ -50,12 +59,11 @@ class Dynamics {
   void kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const;
 
  private:
-  void update_transforms(const Configuration& q);
-
   Model model_;
   std::array<Matrix6, kBodies> inertia_;     // spatial inertia about the body origin
   std::array<Vector6, kBodies> subspace_;    // motion subspace S of revolute joints
   // Workspace.
+  Configuration configuration_;              // of set_configuration()
   std::array<Matrix6, kBodies> transform_;   // X from parent (or world) to body coordinates
   std::array<Vector6, kBodies> velocity_, acceleration_, force_;
   std::array<Matrix6, kBodies> composite_;

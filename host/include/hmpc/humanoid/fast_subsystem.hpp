@@ -29,7 +29,7 @@
 
 namespace hmpc::humanoid {
 
-constexpr int kFastStateSize = 2 * kJoints;  // n_f = 16
+constexpr int kFastStateSize = kLegStateSize;  // n_f = 16
 using FastState = Eigen::Matrix<double, kFastStateSize, 1>;
 
 // z of Eq. 2.47 from x = (q, v), and x with its z replaced.
@@ -95,6 +95,18 @@ class FastSubsystem
     const humanoid::State next =
         step_maps_[j].step_legs(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
     return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
+  }
+
+  // fz = dzeta_{j+1} / dzeta_j = dz+ / dz (z_hat is fixed), from the step map's
+  // linearisation, or by whole-step central differences (ProblemConfig::linearisation).
+  void dynamics_derivatives(const State& zeta, const Control& nu, int j, StateJacobian& fz,
+                            ControlJacobian& fu) const {
+    if (config_.linearisation == Linearisation::kWholeStepDifferences) {
+      Base::dynamics_derivatives(zeta, nu, j, fz, fu);
+    } else {
+      step_maps_[j].linearise_legs(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
+                                   fu);
+    }
   }
 
   double running_cost(const State& zeta, const Control& nu, int) const {

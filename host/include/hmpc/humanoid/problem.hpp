@@ -12,7 +12,9 @@
 // l_xx = 2 J' J with J = dr/dx by central differences (iLQG's usual choice, Tassa et al.
 // 2012); l_xx stays positive semi-definite where the exact Hessian of the angle terms would
 // not, and it costs 2n residual evaluations instead of the n^2 of a full difference Hessian.
-// The dynamics Jacobians are central differences of the step map (ProblemBase default).
+// The dynamics Jacobians are the step map's own linearisation (StepMap::linearise: the chain
+// rule over its sub-steps), or central differences of whole steps (ProblemBase's default),
+// kept as the reference (ProblemConfig::linearisation).
 //
 // Where the thesis leaves a definition open (Fig. 4.2 is not in the text):
 //   - base: p_z^r and v^r are the height and world velocity of a point fixed on the torso,
@@ -45,7 +47,6 @@
 
 namespace hmpc::humanoid {
 
-using StateVector = Eigen::Matrix<double, kStateSize, 1>;
 using StateMatrix = Eigen::Matrix<double, kStateSize, kStateSize>;
 
 inline StateVector to_vector(const State& x) {
@@ -56,6 +57,9 @@ inline StateVector to_vector(const State& x) {
 inline State to_state(const StateVector& x) {
   return State{x.head<kConfigurationSize>(), x.tail<kDofs>()};
 }
+
+// How the problems linearise the step map (see the file comment).
+enum class Linearisation { kSubStepChainRule, kWholeStepDifferences };
 
 struct ProblemConfig {
   double step = 0.03;  // Delta t of the model [s]: 30 ms coarse, 10 ms fine (Table 2.4)
@@ -74,6 +78,7 @@ struct ProblemConfig {
   Vector3 base_point = Vector3(0.0, 0.0, 0.07);
   Parameters parameters{};
   ContactParameters contact{};
+  Linearisation linearisation = Linearisation::kSubStepChainRule;
 };
 
 // The quantities the state cost reads from a state (see the file comment for definitions).
@@ -120,8 +125,10 @@ class HumanoidProblem : public ProblemBase<HumanoidProblem<N>, double, kStateSiz
 
  public:
   using typename Base::Control;
+  using typename Base::ControlJacobian;
   using typename Base::RunningDerivatives;
   using typename Base::State;
+  using typename Base::StateJacobian;
   using typename Base::TerminalDerivatives;
 
   // `pool` (may be null: serial) must outlive the problem and its copies.
@@ -143,6 +150,14 @@ class HumanoidProblem : public ProblemBase<HumanoidProblem<N>, double, kStateSiz
 
   State dynamics(const State& x, const Control& u, int t) const {
     return to_vector(step_maps_[t].step(to_state(x), u, config_.step));
+  }
+  void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
+                            ControlJacobian& fu) const {
+    if (config_.linearisation == Linearisation::kWholeStepDifferences) {
+      Base::dynamics_derivatives(x, u, t, fx, fu);
+    } else {
+      step_maps_[t].linearise(to_state(x), u, config_.step, fx, fu);
+    }
   }
   double running_cost(const State& x, const Control& u, int t) const {
     return cost_.value(x, time_of(t)) + cost_.control_cost(u);
