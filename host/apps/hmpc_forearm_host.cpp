@@ -422,13 +422,9 @@ End run(const Options& o, SocketCan& can, Host& host, int signal_fd, std::string
 int main(int argc, char** argv) {
   Options options;
   std::string error;
-  switch (parse(argc, argv, options, error)) {
-    case hmpc::cli::ParseOutcome::kHelp: print_usage(stdout); return 0;
-    case hmpc::cli::ParseOutcome::kError:
-      std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
-      print_usage(stderr);
-      return 2;
-    case hmpc::cli::ParseOutcome::kRun: break;
+  const auto outcome = parse(argc, argv, options, error);
+  if (outcome != hmpc::cli::ParseOutcome::kRun) {
+    return hmpc::cli::exit_status(outcome, kProgram, error, print_usage);
   }
 
   const int signal_fd = hmpc::platform::stop_signal_descriptor(error);

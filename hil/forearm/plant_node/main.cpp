@@ -304,13 +304,9 @@ End run_real_time(const Options& o, SocketCan& can, PlantNode& node, int signal_
 int main(int argc, char** argv) {
   Options options;
   std::string error;
-  switch (parse_options(argc, argv, options, error)) {
-    case ParseOutcome::kHelp: print_usage(stdout); return 0;
-    case ParseOutcome::kError:
-      std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
-      print_usage(stderr);
-      return 2;
-    case ParseOutcome::kRun: break;
+  const auto outcome = parse_options(argc, argv, options, error);
+  if (outcome != hmpc::cli::ParseOutcome::kRun) {
+    return hmpc::cli::exit_status(outcome, kProgram, error, print_usage);
   }
 
   const int signal_fd = hmpc::platform::stop_signal_descriptor(error);

@@ -366,13 +366,9 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
 int main(int argc, char** argv) {
   Options o;
   std::string error;
-  switch (parse(argc, argv, o, error)) {
-    case hmpc::cli::ParseOutcome::kHelp: print_usage(stdout); return 0;
-    case hmpc::cli::ParseOutcome::kError:
-      std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
-      print_usage(stderr);
-      return 2;
-    case hmpc::cli::ParseOutcome::kRun: break;
+  const auto outcome = parse(argc, argv, o, error);
+  if (outcome != hmpc::cli::ParseOutcome::kRun) {
+    return hmpc::cli::exit_status(outcome, kProgram, error, print_usage);
   }
   const hmpc::hil::HilPrograms programs = hmpc::hil::HilPrograms::built();
   // Every run to make, in the order of the tables; each gets its row slot.

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <functional>
 #include <map>
@@ -36,6 +37,19 @@ inline std::string bad_value(const std::string& name, const std::string& what,
 }
 
 enum class ParseOutcome { kRun, kHelp, kError };
+
+// What main() makes of a parse: kRun to go on; otherwise the program's exit status, after the
+// usage (--help: 0, on stdout) or the error and the usage (2, on stderr).
+inline int exit_status(ParseOutcome outcome, const char* program, const std::string& error,
+                       void (*print_usage)(std::FILE*)) {
+  if (outcome == ParseOutcome::kHelp) {
+    print_usage(stdout);
+    return 0;
+  }
+  std::fprintf(stderr, "%s: %s\n", program, error.c_str());
+  print_usage(stderr);
+  return 2;
+}
 
 class OptionParser {
  public:
