@@ -153,21 +153,42 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   return outcome;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
+// Solve times as reported (whole microseconds, 16 bits): counted per value in a table made once,
+// so a session of any length keeps exact max and median without growing or allocating.
+class SolveTimeHistogram {
+ public:
+  SolveTimeHistogram() : counts_(65536, 0) {}
+  void add(std::uint16_t us) {
+    ++counts_[us];
+    ++total_;
+  }
+  std::uint64_t size() const { return total_; }
+  double max() const {
+    for (std::size_t us = counts_.size(); us-- > 0;)
+      if (counts_[us] > 0) return double(us);
+    return 0;
+  }
+  // The element at index size/2 of the sorted times (the upper median).
+  double median() const {
+    std::uint64_t seen = 0;
+    for (std::size_t us = 0; us < counts_.size(); ++us) {
+      seen += counts_[us];
+      if (seen > total_ / 2) return double(us);
+    }
+    return 0;
+  }
+
+ private:
+  std::vector<std::uint32_t> counts_;
+  std::uint64_t total_ = 0;
+};
 
 // The host: master, bus, faults, DDS and log, one tick per host millisecond.
 class Host {
  public:
   Host(const Options& o, SocketCan& can, hmpc::dds::ForearmDdsBridge* dds, std::FILE* log)
       : o_(o), can_(can), dds_(dds), log_(log), master_({o.node}), sender_(o.node),
-        sync_receiver_(o.node),
-        faults_(o.faults) {
-    solve_times_us_.reserve(std::size_t(std::max(1.0, o.duration_s) * 260));
-  }
+        sync_receiver_(o.node), faults_(o.faults) {}
 
   // One host tick at host time t: the script or DDS commands, then the frames due.
   bool tick(double t, std::string& error) {
@@ -223,8 +244,6 @@ class Host {
   void print_summary(double wall_s) const {
     const auto& r = master_.report();
     const auto& f = faults_.counters();
-    double max_solve = 0;
-    for (double s : solve_times_us_) max_solve = std::max(max_solve, s);
     // Bus load at 1 Mbit/s, worst-case bit stuffing (as forearm_protocol::bus_load): all frames
     // this node's traffic put on the bus, and the host-board part alone (the real robot's).
     const double seconds = std::max(now_s_, 1e-3);
@@ -235,7 +254,7 @@ class Host {
         "frames_sent=%llu frames_received=%llu bus_load_hil_1mbit=%.4f bus_load_robot_1mbit=%.4f "
         "board_mode=%s board_faults=0x%02x board_strategy=%s board_rejected_frames=%u "
         "board_watchdog_trips=%u board_solver_failures=%u board_overruns=%u "
-        "telemetry_frames=%llu solves=%zu solve_time_max_us=%.0f solve_time_median_us=%.0f "
+        "telemetry_frames=%llu solves=%llu solve_time_max_us=%.0f solve_time_median_us=%.0f "
         "host_rejected_frames=%u frames_dropped=%llu frames_corrupted=%llu frames_silenced=%llu "
         "dds_commands=%llu dds_rejected_commands=%llu\n",
         kProgram, now_s_, wall_s, run_start_s_, run_stop_s_,
@@ -248,8 +267,8 @@ class Host {
         proto::value_name(proto::kStrategyValues, std::uint32_t(r.status.strategy)),
         unsigned(r.status.rejected_frames), unsigned(r.status.watchdog_trips),
         unsigned(r.status.solver_failures), unsigned(r.status.overruns),
-        static_cast<unsigned long long>(r.telemetry_frames), solve_times_us_.size(), max_solve,
-        median(solve_times_us_), master_.rejects().total(),
+        static_cast<unsigned long long>(r.telemetry_frames), static_cast<unsigned long long>(solve_times_.size()), solve_times_.max(),
+        solve_times_.median(), master_.rejects().total(),
         static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
         static_cast<unsigned long long>(f.silenced),
         static_cast<unsigned long long>(dds_commands_),
@@ -300,7 +319,7 @@ class Host {
     const auto& r = master_.report();
     const bool running = r.status.mode == proto::BoardMode::kRun;
     if (running && r.telemetry.status != proto::SolveStatusCode::kNoSolve)
-      solve_times_us_.push_back(double(r.telemetry.solve_time_us));
+      solve_times_.add(r.telemetry.solve_time_us);
     const double theta_d = master_.streaming() ? master_.target_angle(now_s_) : NAN;
     if (log_) {
       std::fprintf(log_, "%.3f,%s,%s,%u,%.5f,%.5f,%.4f,%.4f,%.4f,%.4f,%u,%u,%u,%u\n", now_s_,
@@ -353,7 +372,7 @@ class Host {
   double run_start_s_ = -1, run_stop_s_ = -1, run_end_s_ = -1;
   std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
   std::uint64_t dds_commands_ = 0;
-  std::vector<double> solve_times_us_;
+  SolveTimeHistogram solve_times_;
 };
 
 enum class End { kDone, kSignal, kFailure };
