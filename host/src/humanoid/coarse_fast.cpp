@@ -13,6 +13,7 @@ std::unique_ptr<CoarseFast> make_coarse_fast(const Motion& motion, const State& 
   CoarseFast::Config mpc;
   mpc.fine_steps_per_upper_step = kFineStepsPerCoarseStep;
   mpc.samples_per_upper_step = 1;  // sampling period = Delta t_c
+  mpc.state_hold = CoarseFast::Config::StateHold::kLinear;
   mpc.upper = IlqrConfig<double>::with_cap_and_tolerance(kIterationCap, kTolerance);
   mpc.fast = mpc.upper;
   return std::make_unique<CoarseFast>(HumanoidProblem<kCoarseHorizon>(motion, initial, coarse, pool),

@@ -65,6 +65,13 @@ class TwoLayerMpc {
     int samples_per_upper_step = 1;     // sampling periods per upper step (plan shift)
     IlqrConfig<Scalar> upper{};
     IlqrConfig<Scalar> fast{};
+    // How the upper states are held on the fine grid. Eq. 2.35 holds them (zero order);
+    // kLinear interpolates between consecutive upper states, so the reference moves smoothly
+    // (the upper inputs are held in both cases). For a model whose frozen slow state pins the
+    // fast one (the humanoid's base over its stance feet), a held base that jumps every M fine
+    // steps jumps the contacts with it (see host/include/hmpc/humanoid/coarse_fast.hpp).
+    enum class StateHold { kZeroOrder, kLinear };
+    StateHold state_hold = StateHold::kZeroOrder;
   };
 
   TwoLayerMpc(const UpperProblem& upper, const FastSubsystem& fast, const Config& config)
@@ -107,15 +114,19 @@ class TwoLayerMpc {
     upper_result_ = upper_solver_.solve(upper_problem_, UpperLayer::to_upper(upper_problem_, x),
                                         config_.upper.max_iterations, stop);
 
-    // Eq. 2.35: hold each upper state and input for M fine steps.
+    // Eq. 2.35: hold each upper input, and state (or interpolate states), for M fine steps.
     const int M = config_.fine_steps_per_upper_step;
     const auto& xs = upper_solver_.states();
     const auto& us = upper_solver_.controls();
     for (int j = 0; j <= NFast; ++j) {
       const int k = j / M < NUpper ? j / M : NUpper - 1;
       held_controls_[j] = us[k];
-      fast_problem_.set_reference(j, UpperLayer::to_full(upper_problem_, xs[k], us[k]),
-                                  held_controls_[j]);
+      auto x_hat = UpperLayer::to_full(upper_problem_, xs[k], us[k]);
+      if (config_.state_hold == Config::StateHold::kLinear) {
+        const Scalar s = static_cast<Scalar>(j - k * M) / static_cast<Scalar>(M);
+        x_hat += s * (UpperLayer::to_full(upper_problem_, xs[k + 1], us[k]) - x_hat);
+      }
+      fast_problem_.set_reference(j, x_hat, held_controls_[j]);
     }
 
     // Line 5: fast optimisation (Eq. 2.31) from nu = 0 around the held plan.

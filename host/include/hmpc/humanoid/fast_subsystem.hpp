@@ -79,8 +79,10 @@ class FastSubsystem
 
   const ProblemConfig& config() const { return config_; }
 
+  // An interpolated reference (TwoLayerMpc's linear state hold) gets its quaternion normalised.
   void set_reference(int j, const FullState& x_hat, const FullControl& u_hat) {
     x_hat_[j] = x_hat;
+    x_hat_[j].template segment<4>(3).normalize();
     u_hat_[j] = u_hat;
   }
   State deviation(const FullState& x) const { return fast_part(x) - fast_part(x_hat_[0]); }
