@@ -3,10 +3,11 @@
 //     dynamics Jacobians and Gauss-Newton cost derivatives, serial and on a ThreadPool of 2
 //     (thesis Sec. 2.6.2 used 10 OpenMP threads), with the step map's linearisation (sub-step
 //     chain rule, step.hpp) and with the reference (central differences of whole steps);
-//   - with --closed-loop [--threads T] [--linearisation chain-rule|reference]: motion I
-//     (standing) for its file's duration under the Coarse-Fast MPC of Table 2.4 on the 1 ms
-//     simulator, reporting the base height and the solve times (T threads, default 2; the
-//     step map's linearisation by default).
+//   - with --closed-loop [--motion NAME] [--threads T] [--linearisation chain-rule|reference]:
+//     every motion (or NAME, e.g. I-standing) for its file's duration under the Fine, Coarse
+//     and Coarse-Fast MPCs of Table 2.4, with and without warm start, on the 1 ms simulator:
+//     max and median solve time per 30 ms sample, iterations, truncated solves, accumulated
+//     cost normalised to Fine, and whether the robot fell (T threads, default 2).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -18,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "hmpc/humanoid/coarse_fast.hpp"
+#include "hmpc/humanoid/closed_loop.hpp"
 
 namespace {
 
@@ -86,32 +87,42 @@ class Recorder : public benchmark::ConsoleReporter {
   }
 };
 
-void closed_loop(int threads, Linearisation linearisation) {
-  ThreadPool pool(threads);
-  const Motion motion = standing_motion();
-  ProblemConfig config;
-  config.linearisation = linearisation;
-  const std::vector<ClosedLoopSample> samples =
-      run_coarse_fast(motion, motion.duration, threads > 1 ? &pool : nullptr, config);
-  std::vector<double> solve;
-  double low = 1e9, high = -1e9;
-  int unusable = 0;
-  for (const ClosedLoopSample& s : samples) {
-    solve.push_back(s.solve_seconds);
-    low = std::min(low, s.base.position.z());
-    high = std::max(high, s.base.position.z());
-    unusable += s.plan_usable ? 0 : 1;
+// Figs. 2.9, 2.10 and 2.12 analogues: every motion under the Fine, Coarse and Coarse-Fast MPC
+// (Table 2.4), with and without the offline-optimised initial inputs, side by side.
+void closed_loop(const std::vector<std::string>& motions, int threads, Linearisation linearisation) {
+  std::printf("\nClosed loop (closed_loop.hpp): 30 ms sampling, 1 ms simulator, iLQR cap %d, tol %.0e, "
+              "%d thread%s, %s linearisation, solves truncated at 30 ms\n",
+              kIterationCap, kTolerance, threads, threads == 1 ? "" : "s", name_of(linearisation));
+  std::printf("%-22s %-12s %-5s %9s %9s %6s %5s %11s %9s %s\n", "motion", "MPC", "warm", "max [ms]",
+              "med [ms]", "iters", "trunc", "cost", "cost/Fine", "outcome");
+  for (const std::string& file : motions) {
+    const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
+    for (const bool warm : {true, false}) {
+      double fine_cost = 0.0;
+      for (int kind = 0; kind < kMpcKinds; ++kind) {
+        ClosedLoopConfig config;
+        config.mpc = static_cast<MpcKind>(kind);
+        config.warm_start = warm;
+        config.threads = threads;
+        config.problem.linearisation = linearisation;
+        const ClosedLoopRun run = run_closed_loop(motion, config);
+        const ClosedLoopSummary s = summarise(run);
+        if (config.mpc == MpcKind::kFine) fine_cost = s.total_cost;
+        char outcome[64];
+        if (run.fell()) {
+          std::snprintf(outcome, sizeof outcome, "fell at %.2f s", run.fell_at);
+        } else {
+          std::snprintf(outcome, sizeof outcome, "base %.2f-%.2f m", s.min_height, s.max_height);
+        }
+        std::printf("%-22s %-12s %-5s %9.1f %9.1f %6.2f %5d %11.1f %9.3f %s\n", file.c_str(),
+                    name_of(config.mpc), warm ? "yes" : "no", s.max_solve_ms, s.median_solve_ms,
+                    s.mean_iterations, s.truncated, s.total_cost,
+                    fine_cost > 0.0 ? s.total_cost / fine_cost : 0.0, outcome);
+      }
+    }
   }
-  std::sort(solve.begin(), solve.end());
-  const ClosedLoopSample& last = samples.back();
-  std::printf("\nMotion I (standing, target 0.85 m), Coarse-Fast MPC (Table 2.4), %.2f s, %d thread%s, "
-              "%s linearisation\n",
-              last.time, threads, threads == 1 ? "" : "s", name_of(linearisation));
-  std::printf("base height: min %.4f m, max %.4f m, final %.4f m; final |v| %.3f m/s, tilt %.4f\n",
-              low, high, last.base.position.z(), last.base.velocity.norm(),
-              last.base.quaternion.tail<3>().norm());
-  std::printf("solve per 30 ms sample: max %.1f ms, median %.1f ms; unusable plans %d of %zu\n",
-              solve.back() * 1e3, solve[solve.size() / 2] * 1e3, unusable, samples.size());
+  std::printf("cost: Sec. 4.3.1's running cost integrated over the run, per 30 ms; cost/Fine compares "
+              "runs of equal length only (a fallen run ends early)\n");
 }
 
 }  // namespace
@@ -129,10 +140,15 @@ int main(int argc, char** argv) {
   bool run_closed_loop = false;
   int threads = 2;
   Linearisation linearisation = Linearisation::kSubStepChainRule;
+  std::vector<std::string> motions = {"I-standing",     "II-walking",         "III-running",
+                                      "IV-sitting",     "V-low-jump",         "VI-half-turn-jump",
+                                      "VII-high-jump",  "VIII-double-flip"};
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--closed-loop") {
       run_closed_loop = true;
+    } else if (arg == "--motion" && i + 1 < argc) {
+      motions = {argv[++i]};
     } else if (arg == "--linearisation" && i + 1 < argc) {
       const std::string value = argv[++i];
       if (value == name_of(Linearisation::kSubStepChainRule)) {
@@ -153,8 +169,8 @@ int main(int argc, char** argv) {
       threads = static_cast<int>(value);
     } else {
       std::fprintf(stderr,
-                   "unknown argument '%s' (expected --closed-loop, --threads T, "
-                   "--linearisation chain-rule|reference)\n",
+                   "unknown argument '%s' (expected --closed-loop, --motion NAME (e.g. I-standing), "
+                   "--threads T, --linearisation chain-rule|reference)\n",
                    arg.c_str());
       return 2;
     }
@@ -178,6 +194,6 @@ int main(int argc, char** argv) {
                 kCoarseHorizon, s.at({chain_rule, 1}) * 1e3, s.at({chain_rule, 2}) * 1e3,
                 s.at({chain_rule, 1}) / s.at({chain_rule, 2}));
   }
-  if (run_closed_loop) closed_loop(threads, linearisation);
+  if (run_closed_loop) closed_loop(motions, threads, linearisation);
   return 0;
 }

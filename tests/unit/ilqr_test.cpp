@@ -380,4 +380,19 @@ TEST(RecedingHorizonMpc, ShiftsOncePerModelStep) {
   EXPECT_EQ(frozen.update(Pendulum::State(0.2, 0.0)), plan[1]);
 }
 
+TEST(RecedingHorizonMpc, AppliesAndShiftsSeveralStepsPerSample) {
+  Pendulum problem;
+  using Mpc = hmpc::RecedingHorizonMpc<Pendulum, 20>;
+  Mpc::Config config;
+  config.solver.max_iterations = 0;
+  config.steps_per_sample = 3;
+  Mpc frozen(problem, config);
+  frozen.initialize(Pendulum::State(0.2, 0.0), 100);
+  const auto plan = frozen.solver().controls();
+  EXPECT_EQ(frozen.update(Pendulum::State(0.2, 0.0)), plan[0]);
+  for (int j = 0; j < 3; ++j) EXPECT_EQ(frozen.planned_control(j), plan[j]);
+  EXPECT_EQ(frozen.update(Pendulum::State(0.2, 0.0)), plan[3]);
+  EXPECT_EQ(frozen.planned_control(2), plan[5]);
+}
+
 }  // namespace

@@ -3,6 +3,8 @@
 // coarser step (Delta t_c > Delta t) it is the "Coarse MPC" of Sec. 2.3.3.
 #pragma once
 
+#include <array>
+
 #include "hmpc/mpc/sampling.hpp"
 #include "hmpc/solver/ilqr.hpp"
 
@@ -22,11 +24,20 @@ class RecedingHorizonMpc {
     // model step has elapsed. 1 for a Fine MPC.
     int samples_per_step = 1;
     IlqrConfig<Scalar> solver{};
+    // Model steps per sampling period, for a model step shorter than the period (the
+    // humanoid's Fine MPC: 10 ms steps, 30 ms sampling, Table 2.4): the inputs of steps
+    // 0..steps_per_sample-1 are applied in turn (planned_control) and the plan shifts by that
+    // many steps each period. 1..kMaxStepsPerSample; used only with samples_per_step = 1.
+    int steps_per_sample = 1;
   };
+  static constexpr int kMaxStepsPerSample = 8;
 
   RecedingHorizonMpc(const Problem& problem, const Config& config)
       : problem_(problem), config_(config), solver_(config.solver),
-        clock_(config.samples_per_step) {}
+        clock_(config.samples_per_step),
+        steps_per_sample_(config.steps_per_sample < 1                    ? 1
+                          : config.steps_per_sample > kMaxStepsPerSample ? kMaxStepsPerSample
+                                                                         : config.steps_per_sample) {}
 
   Problem& problem() { return problem_; }
   const Problem& problem() const { return problem_; }
@@ -54,9 +65,13 @@ class RecedingHorizonMpc {
   template <class StopPredicate = NeverStop>
   Control update(const State& x, StopPredicate&& stop = StopPredicate{}) {
     result_ = solver_.solve(problem_, x, config_.solver.max_iterations, stop);
-    const Control u = solver_.controls()[0];
-    if (clock_.advance()) solver_.shift(1);  // Eq. 2.22
-    return u;
+    for (int j = 0; j < steps_per_sample_; ++j) applied_[j] = solver_.controls()[j < N ? j : N - 1];
+    if (clock_.advance()) solver_.shift(steps_per_sample_);  // Eq. 2.22
+    return applied_[0];
+  }
+  // The input for model step j (0 <= j < steps_per_sample) of the current sampling period.
+  Control planned_control(int j) const {
+    return applied_[j < 0 ? 0 : j >= steps_per_sample_ ? steps_per_sample_ - 1 : j];
   }
 
  private:
@@ -64,6 +79,8 @@ class RecedingHorizonMpc {
   Config config_;
   Solver solver_;
   SampleClock clock_;
+  int steps_per_sample_;
+  std::array<Control, kMaxStepsPerSample> applied_{};
   Result result_{};
 };
 

@@ -1,9 +1,8 @@
 // The humanoid's Coarse-Fast MPC (thesis Sec. 2.3.3 on the humanoid of Secs. 2.5-2.6) with
-// the settings of Table 2.4 and Sec. 2.6.2, and a closed loop on the 1 ms simulator.
+// the settings of Table 2.4 and Sec. 2.6.2 (closed loop: closed_loop.hpp).
 #pragma once
 
 #include <memory>
-#include <vector>
 
 #include "hmpc/humanoid/fast_subsystem.hpp"
 #include "hmpc/mpc/two_layer_mpc.hpp"
@@ -39,20 +38,5 @@ using CoarseFast = CoarseFastMpc<HumanoidProblem<kCoarseHorizon>, kCoarseHorizon
 // gets the motion's chair). `pool` may be null (serial) and must outlive the MPC.
 std::unique_ptr<CoarseFast> make_coarse_fast(const Motion& motion, const State& initial,
                                              ThreadPool* pool, ProblemConfig config = ProblemConfig{});
-
-struct ClosedLoopSample {
-  double time = 0.0;           // [s], at the end of the sampling period
-  BaseFeatures base;           // of the simulated robot
-  double solve_seconds = 0.0;  // wall clock of the MPC update that started the period
-  int upper_iterations = 0, fast_iterations = 0;
-  bool plan_usable = false;
-};
-
-// Algorithm 1 on the simulator: offline initialisation, then per 30 ms sample one MPC update
-// from the simulated state and the composed inputs (Eq. 2.36) of fine steps 0..M-1, each held
-// for 10 ms on the 1 ms step map. The solve is taken as instantaneous (no computation delay).
-std::vector<ClosedLoopSample> run_coarse_fast(const Motion& motion, double duration,
-                                              ThreadPool* pool,
-                                              const ProblemConfig& config = ProblemConfig{});
 
 }  // namespace hmpc::humanoid

@@ -1,0 +1,109 @@
+// hmpc-humanoid: runs a humanoid motion (Tables 2.2-2.3) in closed loop under a chosen MPC of
+// Table 2.4 on the 1 ms simulator, prints its figures and writes its log and pictures
+// (trajectory.csv, filmstrip.png, base.png; viewing.hpp).
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "hmpc/cli/arguments.hpp"
+#include "hmpc/humanoid/viewing.hpp"
+
+namespace {
+
+using namespace hmpc::humanoid;
+
+constexpr int kFellStatus = 3;
+
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: hmpc-humanoid --motion NAME|FILE [options]\n"
+               "  --motion NAME|FILE  a motion file, or the name of one shipped in\n"
+               "                      " HMPC_HUMANOID_MOTIONS " (e.g. I-standing, V-low-jump)\n"
+               "  --mpc KIND          fine, coarse or coarse-fast (default: coarse-fast)\n"
+               "  --duration S        simulated seconds, 0.03..60 (default: the motion file's)\n"
+               "  --threads T         linearisation threads, 1..64 (default: 2)\n"
+               "  --frames N          stick figures in filmstrip.png, 2..16 (default: 8)\n"
+               "  --out DIR           where to write trajectory.csv and the pictures\n"
+               "                      (default: humanoid-MOTION-KIND)\n"
+               "  --no-warm-start     skip the offline optimisation of the initial inputs\n"
+               "  --no-truncate       let a solve run past the 30 ms sampling time\n"
+               "exit status: 0 motion completed, %d the robot fell (base below 0.40 m), 2 bad\n"
+               "arguments or motion file, 1 the log or pictures could not be written\n",
+               kFellStatus);
+}
+
+std::string motion_path(const std::string& value) {
+  if (value.find('/') != std::string::npos || value.find(".motion") != std::string::npos) return value;
+  return std::string(HMPC_HUMANOID_MOTIONS) + "/" + value + ".motion";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string motion_name, out;
+  ClosedLoopConfig config;
+  bool no_warm_start = false, no_truncate = false;
+  int frames = 8;
+  hmpc::cli::OptionParser parser;
+  parser.text("--motion", [&](const std::string& v) {
+    motion_name = v;
+    return v.empty() ? std::string("--motion needs a name or file") : std::string();
+  });
+  parser.text("--mpc", [&](const std::string& v) {
+    return parse_mpc_kind(v, config.mpc) ? std::string()
+                                         : hmpc::cli::bad_value("--mpc", "fine, coarse or coarse-fast", v);
+  });
+  parser.number("--duration", 0.03, 60.0, "seconds in 0.03..60", config.duration);
+  parser.integer("--threads", 1, 64, config.threads);
+  parser.integer("--frames", 2, 16, frames);
+  parser.text("--out", [&](const std::string& v) {
+    out = v;
+    return v.empty() ? std::string("--out needs a directory") : std::string();
+  });
+  parser.flag("--no-warm-start", no_warm_start);
+  parser.flag("--no-truncate", no_truncate);
+  std::string error;
+  const auto outcome = parser.parse(argc, argv, error);
+  if (outcome == hmpc::cli::ParseOutcome::kRun && motion_name.empty()) {
+    return hmpc::cli::exit_status(hmpc::cli::ParseOutcome::kError, "hmpc-humanoid",
+                                  "--motion is required", usage);
+  }
+  if (outcome != hmpc::cli::ParseOutcome::kRun) {
+    return hmpc::cli::exit_status(outcome, "hmpc-humanoid", error, usage);
+  }
+  config.warm_start = !no_warm_start;
+  config.truncate = !no_truncate;
+
+  Motion motion;
+  try {
+    motion = load_motion(motion_path(motion_name));
+  } catch (const MotionFileError& e) {
+    std::fprintf(stderr, "hmpc-humanoid: %s\n", e.what());
+    return 2;
+  }
+  const std::string stem = std::filesystem::path(motion_path(motion_name)).stem().string();
+  if (out.empty()) out = "humanoid-" + stem + "-" + name_of(config.mpc);
+
+  const ClosedLoopRun run = run_closed_loop(motion, config);
+  const ClosedLoopSummary s = summarise(run);
+  const ClosedLoopSample& last = run.samples.back();
+  std::printf("motion %s, %s MPC%s, %.2f s simulated\n", stem.c_str(), name_of(config.mpc),
+              config.warm_start ? "" : " (no warm start)", last.time);
+  std::printf("base point height %.3f..%.3f m, final %.3f m; final velocity (%.2f, %.2f, %.2f) m/s\n",
+              s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
+              last.base.velocity.y(), last.base.velocity.z());
+  std::printf("solve per 30 ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
+              "truncated %d, unusable %d of %zu\n",
+              s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.unusable,
+              run.samples.size());
+  std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
+  if (run.fell()) std::printf("the robot FELL at %.2f s (base point below %.2f m)\n", run.fell_at, config.fallen_height);
+
+  const std::string title = stem + ", " + name_of(config.mpc) + " MPC";
+  if (!write_run(out, title, motion, run, frames, error)) {
+    std::fprintf(stderr, "hmpc-humanoid: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("wrote %s/trajectory.csv, filmstrip.png, base.png\n", out.c_str());
+  return run.fell() ? kFellStatus : 0;
+}

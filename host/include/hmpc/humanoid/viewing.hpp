@@ -1,0 +1,34 @@
+// What a person looks at after a closed-loop run (closed_loop.hpp): the trajectory as CSV and
+// pictures drawn by gnuplot, a filmstrip of stick figures like the thesis's Figs. 2.7-2.8
+// (side view x-z above, front view y-z below, each frame centred on the base) and the base's
+// height and forward velocity against the motion's targets.
+#pragma once
+
+#include <array>
+#include <iosfwd>
+#include <string>
+
+#include "hmpc/humanoid/closed_loop.hpp"
+
+namespace hmpc::humanoid {
+
+// The stick figure's points (world) at a state.
+struct StickFigure {
+  Vector3 vertex, mid_hip;
+  std::array<Vector3, 2> hip, knee, ankle, heel, toe;  // left, right
+};
+StickFigure stick_figure(const State& x, const ProblemConfig& config = ProblemConfig{});
+
+// One row per 30 ms sample (header line first; columns named there): time, base point
+// position and velocity, torso quaternion, leg angles, joint angles, applied torques, foot and
+// seat forces, solve time, iterations, truncation, period cost, and the phase targets.
+void write_trajectory_csv(std::ostream& out, const Motion& motion, const ClosedLoopRun& run);
+
+// Writes DIR/trajectory.csv, DIR/filmstrip.dat, DIR/humanoid.gp and runs gnuplot for
+// DIR/filmstrip.png (`frames` evenly spaced samples, 2..16) and DIR/base.png. `title` heads
+// the pictures. Returns false (with the reason in `error`) if a file cannot be written or
+// gnuplot fails; the CSV is written first, so it survives a plotting failure.
+bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
+               const ClosedLoopRun& run, int frames, std::string& error);
+
+}  // namespace hmpc::humanoid

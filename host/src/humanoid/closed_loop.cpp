@@ -1,0 +1,184 @@
+#include "hmpc/humanoid/closed_loop.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "hmpc/mpc/receding_horizon_mpc.hpp"
+
+namespace hmpc::humanoid {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Fine = RecedingHorizonMpc<HumanoidProblem<kFineHorizon>, kFineHorizon>;
+using Coarse = RecedingHorizonMpc<HumanoidProblem<kCoarseHorizon>, kCoarseHorizon>;
+
+constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
+
+IlqrConfig<double> layer_solver() {
+  return IlqrConfig<double>::with_cap_and_tolerance(kIterationCap, kTolerance);
+}
+
+template <int N>
+std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N>, N>> make_single_layer(
+    const Motion& motion, const State& initial, ThreadPool* pool, ProblemConfig config, double step) {
+  config.contact = contact_for(motion, config.contact);
+  config.step = step;
+  typename RecedingHorizonMpc<HumanoidProblem<N>, N>::Config mpc;
+  mpc.solver = layer_solver();
+  mpc.steps_per_sample = static_cast<int>(kSamplingPeriod / step + 0.5);
+  return std::make_unique<RecedingHorizonMpc<HumanoidProblem<N>, N>>(
+      HumanoidProblem<N>(motion, initial, config, pool), mpc);
+}
+
+// What the loop needs from each MPC.
+template <class Mpc>
+auto& problem_of(Mpc& mpc) { return mpc.problem(); }
+auto& problem_of(CoarseFast& mpc) { return mpc.upper_problem(); }
+template <class Mpc>
+int iterations_of(const Mpc& mpc) { return mpc.last_result().iterations; }
+int iterations_of(const CoarseFast& mpc) { return mpc.last_upper_result().iterations; }
+template <class Mpc>
+int fast_iterations_of(const Mpc&) { return 0; }
+int fast_iterations_of(const CoarseFast& mpc) { return mpc.last_fast_result().iterations; }
+template <class Mpc>
+bool stopped_early(const Mpc& mpc) { return mpc.last_result().status == SolveStatus::kBudgetExhausted; }
+bool stopped_early(const CoarseFast& mpc) {
+  return mpc.last_upper_result().status == SolveStatus::kBudgetExhausted ||
+         mpc.last_fast_result().status == SolveStatus::kBudgetExhausted;
+}
+
+bool finite(const State& x) { return x.q.allFinite() && x.v.allFinite(); }
+
+template <class Mpc>
+ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
+                       const State& initial, double duration) {
+  ProblemConfig plant = config.problem;
+  plant.contact = contact_for(motion, config.problem.contact);
+  const StateCost observer(motion, initial, plant);
+  StepMap simulator(Model(plant.parameters), plant.parameters, plant.contact, kSimulatorStep);
+  constexpr int kFineSteps = kFineStepsPerCoarseStep;  // 10 ms input steps per sample
+  constexpr int kSimulatorSteps = static_cast<int>(kFastStep / kSimulatorStep + 0.5);
+
+  if (config.warm_start) mpc.initialize(to_vector(initial), kOfflineIterations);
+  ClosedLoopRun run;
+  run.initial = initial;
+  const int count = static_cast<int>(duration / kSamplingPeriod + 0.5);
+  run.samples.reserve(count);
+  State x = initial;
+  for (int k = 0; k < count; ++k) {
+    const double t0 = k * kSamplingPeriod;
+    problem_of(mpc).set_start_time(t0);
+    const auto start = Clock::now();
+    const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(kSamplingPeriod));
+    const bool truncate = config.truncate;
+    mpc.update(to_vector(x), [&] { return truncate && Clock::now() >= deadline; });
+    ClosedLoopSample sample;
+    sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    sample.truncated = stopped_early(mpc);
+    sample.torque = mpc.planned_control(0);
+    for (int j = 0; j < kFineSteps; ++j) {
+      const JointVector u = mpc.planned_control(j);
+      for (int i = 0; i < kSimulatorSteps; ++i) {
+        const double t = t0 + (j * kSimulatorSteps + i) * kSimulatorStep;
+        sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
+                       (kSimulatorStep / kCoarseStep);
+        x = simulator.step(x, u, kSimulatorStep);
+      }
+    }
+    sample.time = t0 + kSamplingPeriod;
+    sample.state = x;
+    sample.iterations = iterations_of(mpc);
+    sample.fast_iterations = fast_iterations_of(mpc);
+    sample.plan_usable = mpc.last_plan_usable();
+    if (finite(x)) {
+      sample.base = observer.features(x);
+      const ContactState& contact = simulator.evaluate_contact(x);
+      for (int i = 0; i < contact.count; ++i) {
+        const double fz = contact.force[i].z();
+        (i < kFootPoints ? sample.left_force : i < kSolePoints ? sample.right_force : sample.seat_force) += fz;
+      }
+    }
+    run.samples.push_back(sample);
+    if (!finite(x) || sample.base.position.z() < config.fallen_height) {
+      run.fell_at = sample.time;
+      break;
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+const char* name_of(MpcKind kind) { return kNames[static_cast<int>(kind)]; }
+
+bool parse_mpc_kind(const std::string& name, MpcKind& kind) {
+  for (int i = 0; i < kMpcKinds; ++i) {
+    if (name == kNames[i]) {
+      kind = static_cast<MpcKind>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
+ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& config) {
+  if (!(config.duration >= 0.0) || !std::isfinite(config.duration)) {
+    throw std::invalid_argument("closed loop: the duration must be a positive number of seconds");
+  }
+  const double duration = config.duration > 0.0 ? config.duration : motion.duration;
+  if (!(duration > 0.0)) {
+    throw std::invalid_argument("closed loop: the duration must be a positive number of seconds");
+  }
+  if (config.threads < 1 || config.threads > 64) {
+    throw std::invalid_argument("closed loop: threads must be in 1..64");
+  }
+  ThreadPool pool(config.threads);
+  ThreadPool* workers = config.threads > 1 ? &pool : nullptr;
+  ProblemConfig start = config.problem;
+  start.contact = contact_for(motion, config.problem.contact);
+  const State initial = standing_state(start, motion.phase_at(0.0).height);
+  switch (config.mpc) {
+    case MpcKind::kFine: {
+      const auto mpc = make_single_layer<kFineHorizon>(motion, initial, workers, config.problem, kFineStep);
+      return simulate(*mpc, motion, config, initial, duration);
+    }
+    case MpcKind::kCoarse: {
+      const auto mpc = make_single_layer<kCoarseHorizon>(motion, initial, workers, config.problem, kCoarseStep);
+      return simulate(*mpc, motion, config, initial, duration);
+    }
+    case MpcKind::kCoarseFast:
+    default: {
+      const auto mpc = make_coarse_fast(motion, initial, workers, config.problem);
+      return simulate(*mpc, motion, config, initial, duration);
+    }
+  }
+}
+
+ClosedLoopSummary summarise(const ClosedLoopRun& run) {
+  ClosedLoopSummary s;
+  if (run.samples.empty()) return s;
+  std::vector<double> solve;
+  solve.reserve(run.samples.size());
+  s.min_height = s.max_height = run.samples.front().base.position.z();
+  double iterations = 0.0;
+  for (const ClosedLoopSample& sample : run.samples) {
+    solve.push_back(sample.solve_seconds * 1e3);
+    iterations += sample.iterations;
+    s.truncated += sample.truncated ? 1 : 0;
+    s.unusable += sample.plan_usable ? 0 : 1;
+    s.total_cost += sample.cost;
+    s.min_height = std::min(s.min_height, sample.base.position.z());
+    s.max_height = std::max(s.max_height, sample.base.position.z());
+  }
+  std::sort(solve.begin(), solve.end());
+  s.max_solve_ms = solve.back();
+  s.median_solve_ms = solve[solve.size() / 2];
+  s.mean_iterations = iterations / static_cast<double>(run.samples.size());
+  return s;
+}
+
+}  // namespace hmpc::humanoid

@@ -1,0 +1,171 @@
+#include "hmpc/humanoid/viewing.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <ostream>
+
+namespace hmpc::humanoid {
+namespace {
+
+const char* const kLegNames[2] = {"left", "right"};
+const char* const kJointNames[kJointsPerLeg] = {"hip_abduction", "hip_flexion", "knee", "ankle"};
+// trajectory.csv's columns (1-based, as gnuplot counts): 15 base columns, joints and torques,
+// then 9 more before target_height and target_vx.
+constexpr int kTargetHeightColumn = 15 + 2 * kJoints + 10;
+
+void write_point(std::ostream& out, const Vector3& p, const Vector3& centre) {
+  out << p.x() - centre.x() << ' ' << p.y() - centre.y() << ' ' << p.z() << '\n';
+}
+
+// One frame: polylines separated by blank lines, coordinates relative to the base's (x, y).
+void write_frame(std::ostream& out, const StickFigure& f, const Motion& motion) {
+  const Vector3 centre = f.mid_hip;
+  write_point(out, f.vertex, centre);
+  write_point(out, f.mid_hip, centre);
+  out << '\n';
+  write_point(out, f.hip[0], centre);
+  write_point(out, f.hip[1], centre);
+  out << '\n';
+  for (int leg = 0; leg < 2; ++leg) {
+    for (const Vector3& p : {f.hip[leg], f.knee[leg], f.ankle[leg], f.heel[leg], f.toe[leg], f.ankle[leg]}) {
+      write_point(out, p, centre);
+    }
+    out << '\n';
+  }
+  if (motion.chair) {
+    write_point(out, Vector3(motion.seat_x_min, centre.y() - 0.25, motion.seat_height), centre);
+    write_point(out, Vector3(motion.seat_x_max, centre.y() + 0.25, motion.seat_height), centre);
+    out << '\n';
+  }
+}
+
+bool fail(std::string& error, const std::string& message) {
+  error = message;
+  return false;
+}
+
+}  // namespace
+
+StickFigure stick_figure(const State& x, const ProblemConfig& config) {
+  const Model model(config.parameters);
+  const Dynamics dynamics(model);
+  const ContactModel contact(model, config.parameters, config.contact);
+  Kinematics kin;
+  dynamics.kinematics(x.q, x.v, kin);
+  ContactState points;
+  contact.evaluate(kin, x.v, points);
+  StickFigure f;
+  f.mid_hip = kin.position[0];
+  f.vertex = kin.position[0] + kin.rotation[0] * model.vertex;
+  for (int leg = 0; leg < 2; ++leg) {
+    f.hip[leg] = kin.position[Model::body_of(leg, kHipFlexion)];
+    f.knee[leg] = kin.position[Model::body_of(leg, kKnee)];
+    f.ankle[leg] = kin.position[Model::body_of(leg, kAnkle)];
+    // Sole points 0-1 of a foot are at the heel, 2-3 at the toe (contact.cpp).
+    const int first = leg * kFootPoints;
+    f.heel[leg] = 0.5 * (points.position[first] + points.position[first + 1]);
+    f.toe[leg] = 0.5 * (points.position[first + 2] + points.position[first + 3]);
+  }
+  return f;
+}
+
+void write_trajectory_csv(std::ostream& out, const Motion& motion, const ClosedLoopRun& run) {
+  out << "time,base_x,base_y,base_z,base_vx,base_vy,base_vz,quat_w,quat_x,quat_y,quat_z,"
+         "alpha_left,alpha_right,beta_left,beta_right";
+  for (const char* leg : kLegNames)
+    for (const char* joint : kJointNames) out << ',' << leg << '_' << joint;
+  for (const char* leg : kLegNames)
+    for (const char* joint : kJointNames) out << ",torque_" << leg << '_' << joint;
+  out << ",force_left,force_right,force_seat,solve_ms,iterations,fast_iterations,truncated,"
+         "plan_usable,cost,target_height,target_vx,target_vy,target_vz,target_roll,target_pitch,"
+         "target_yaw\n";
+  out.precision(9);
+  for (const ClosedLoopSample& s : run.samples) {
+    const BaseFeatures& b = s.base;
+    out << s.time << ',' << b.position.x() << ',' << b.position.y() << ',' << b.position.z() << ','
+        << b.velocity.x() << ',' << b.velocity.y() << ',' << b.velocity.z() << ',' << b.quaternion[0]
+        << ',' << b.quaternion[1] << ',' << b.quaternion[2] << ',' << b.quaternion[3] << ','
+        << b.alpha_left << ',' << b.alpha_right << ',' << b.beta_left << ',' << b.beta_right;
+    for (int i = 0; i < kJoints; ++i) out << ',' << s.state.q[7 + i];
+    for (int i = 0; i < kJoints; ++i) out << ',' << s.torque[i];
+    const Phase& target = motion.phase_at(s.time);
+    out << ',' << s.left_force << ',' << s.right_force << ',' << s.seat_force << ','
+        << s.solve_seconds * 1e3 << ',' << s.iterations << ',' << s.fast_iterations << ','
+        << (s.truncated ? 1 : 0) << ',' << (s.plan_usable ? 1 : 0) << ',' << s.cost << ','
+        << target.height << ',' << target.velocity.x() << ',' << target.velocity.y() << ','
+        << target.velocity.z() << ',' << target.attitude.x() << ',' << target.attitude.y() << ','
+        << target.attitude.z() << '\n';
+  }
+}
+
+bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
+               const ClosedLoopRun& run, int frames, std::string& error) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return fail(error, "cannot create " + dir + ": " + ec.message());
+  const fs::path base(dir);
+  {
+    std::ofstream csv(base / "trajectory.csv");
+    write_trajectory_csv(csv, motion, run);
+    if (!csv) return fail(error, "cannot write " + (base / "trajectory.csv").string());
+  }
+  if (run.samples.empty()) return fail(error, "the run has no samples to draw");
+  frames = std::clamp(frames, 2, 16);
+  const int count = static_cast<int>(run.samples.size());
+  std::string times;
+  double top = 1.0;
+  {
+    std::ofstream dat(base / "filmstrip.dat");
+    dat.precision(6);
+    for (int i = 0; i < frames; ++i) {
+      const ClosedLoopSample& s = run.samples[(count - 1) * i / (frames - 1)];
+      const StickFigure f = stick_figure(s.state);
+      top = std::max({top, f.vertex.z(), f.toe[0].z(), f.toe[1].z()});
+      dat << "# t = " << s.time << " s\n";
+      write_frame(dat, f, motion);
+      dat << "\n";
+      char t[32];
+      std::snprintf(t, sizeof t, "%s%.2f", i == 0 ? "" : " ", s.time);
+      times += t;
+    }
+    if (!dat) return fail(error, "cannot write " + (base / "filmstrip.dat").string());
+  }
+  const fs::path script = base / "humanoid.gp";
+  {
+    std::ofstream gp(script);
+    gp << "# gnuplot " << script.filename().string() << " (in this directory) redraws the pictures\n"
+       << "set terminal pngcairo size " << 190 * frames << ",560 noenhanced\n"
+       << "set output 'filmstrip.png'\n"
+       << "times = '" << times << "'\n"
+       << "set multiplot layout 2," << frames << " title '" << title << " (side x-z above, front y-z below)'\n"
+       << "unset key\nset size ratio -1\nset xrange [-0.8:0.8]\nset yrange [-0.05:" << top + 0.1 << "]\n"
+       << "set xtics 0.4 font ',8'\nset ytics 0.5 font ',8'\n"
+       << "do for [i=0:" << frames - 1 << "] { set title word(times, i+1).' s'; "
+       << "plot 'filmstrip.dat' index i using 1:3 with lines lw 2 lc rgb '#1f4e99', 0 lc rgb 'gray' }\n"
+       << "do for [i=0:" << frames - 1 << "] { set title word(times, i+1).' s'; "
+       << "plot 'filmstrip.dat' index i using 2:3 with lines lw 2 lc rgb '#99321f', 0 lc rgb 'gray' }\n"
+       << "unset multiplot\n"
+       << "set terminal pngcairo size 900,640 noenhanced\nset output 'base.png'\n"
+       << "set datafile separator ','\nset size noratio\nset autoscale\nunset title\n"
+       << "set xtics autofreq font ''\nset ytics autofreq font ''\nset key outside top center horizontal\n"
+       << "set multiplot layout 2,1 title '" << title << "'\n"
+       << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:4 with lines lw 2 title 'base point', "
+       << "'' using 1:" << kTargetHeightColumn << " with steps dt 2 title 'target'\n"
+       << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:5 with lines lw 2 "
+       << "title 'base point', '' using 1:" << kTargetHeightColumn + 1 << " with steps dt 2 title 'target'\n"
+       << "unset multiplot\n";
+    if (!gp) return fail(error, "cannot write " + script.string());
+  }
+  const std::string command = "cd '" + dir + "' && gnuplot humanoid.gp 2> gnuplot.log";
+  if (std::system(command.c_str()) != 0) {
+    return fail(error, "gnuplot failed (see " + (base / "gnuplot.log").string() +
+                           "); install it with toolchains/setup-debian.sh");
+  }
+  return true;
+}
+
+}  // namespace hmpc::humanoid

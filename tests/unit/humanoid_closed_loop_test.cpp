@@ -1,0 +1,156 @@
+// Humanoid motions in closed loop (closed_loop.hpp): the physical checks of the motions that
+// run, the Fine / Coarse / Coarse-Fast comparison, and the trajectory log.
+//
+// Solves are not truncated here (ClosedLoopConfig::truncate = false): a truncated solve
+// depends on the machine's load, and ctest shares 2 cores; with it off a run is the same
+// numbers every time (the thread pool's results are bit-identical to serial ones). Solve times
+// against the 30 ms sampling time are measured by humanoid_mpc_bench --closed-loop.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+#include "hmpc/humanoid/viewing.hpp"
+
+namespace {
+
+using namespace hmpc::humanoid;
+
+Motion motion(const std::string& name) {
+  return load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion");
+}
+
+ClosedLoopRun run(const Motion& m, MpcKind kind, double duration) {
+  ClosedLoopConfig config;
+  config.mpc = kind;
+  config.duration = duration;
+  config.truncate = false;
+  return run_closed_loop(m, config);
+}
+
+// Motion I (issue 5's check): the base point at 0.85 +- 0.05 m for 5 s. Physics of the
+// bound: 5 cm is what a knee bend of ~6 degrees moves the base of our stance; a robot that
+// starts to fall leaves it within a few hundred ms. Also upright (tilt below 0.1 rad,
+// quaternion vector part below 0.05) and both feet loaded throughout.
+TEST(HumanoidClosedLoop, CoarseFastStandsFiveSeconds) {
+  const ClosedLoopRun r = run(motion("I-standing"), MpcKind::kCoarseFast, 5.0);
+  ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
+  ASSERT_EQ(r.samples.size(), 167u);
+  const double weight = 47.0 * 9.81;
+  for (const ClosedLoopSample& s : r.samples) {
+    ASSERT_NEAR(s.base.position.z(), 0.85, 0.05) << "t = " << s.time;
+    ASSERT_LT(s.base.quaternion.tail<3>().norm(), 0.05) << "t = " << s.time;
+    ASSERT_GT(s.left_force, 0.2 * weight) << "t = " << s.time;
+    ASSERT_GT(s.right_force, 0.2 * weight) << "t = " << s.time;
+    ASSERT_TRUE(s.plan_usable) << "t = " << s.time;
+  }
+  // Standing load about m g: the smooth contact carries the body (no sinking, no bouncing).
+  const ClosedLoopSample& last = r.samples.back();
+  EXPECT_NEAR(last.left_force + last.right_force, weight, 0.05 * weight);
+}
+
+// Figs. 2.10/2.12's ordering on motion I: Coarse-Fast's accumulated cost below Coarse's, and
+// within 10 % of Fine's (issue 5's target).
+TEST(HumanoidClosedLoop, CoarseFastCostsLessThanCoarseOnStanding) {
+  const Motion m = motion("I-standing");
+  double cost[kMpcKinds];
+  for (int kind = 0; kind < kMpcKinds; ++kind) {
+    const ClosedLoopRun r = run(m, static_cast<MpcKind>(kind), m.duration);
+    ASSERT_FALSE(r.fell()) << name_of(static_cast<MpcKind>(kind));
+    cost[kind] = summarise(r).total_cost;
+  }
+  const double fine = cost[static_cast<int>(MpcKind::kFine)];
+  const double coarse = cost[static_cast<int>(MpcKind::kCoarse)];
+  const double coarse_fast = cost[static_cast<int>(MpcKind::kCoarseFast)];
+  std::printf("motion I cost: Fine %.3f, Coarse %.3f (%.4f x Fine), Coarse-Fast %.3f (%.4f x Fine)\n",
+              fine, coarse, coarse / fine, coarse_fast, coarse_fast / fine);
+  EXPECT_LT(coarse_fast, coarse);
+  EXPECT_LT(coarse_fast, 1.1 * fine);
+}
+
+// A run that falls ends early and says when.
+TEST(HumanoidClosedLoop, AFallEndsTheRun) {
+  Motion m = motion("I-standing");
+  // With every state weight zero the MPC only minimises torque: the legs go limp.
+  m.weights.attitude.setZero();
+  m.weights.height = 0.0;
+  m.weights.velocity.setZero();
+  m.weights.alpha = m.weights.beta = 0.0;
+  m.weights.angular_velocity.setZero();
+  m.weights.fast = 0.0;
+  const ClosedLoopRun r = run(m, MpcKind::kCoarse, 3.0);
+  ASSERT_TRUE(r.fell());
+  EXPECT_LT(r.samples.size(), 100u);
+  EXPECT_DOUBLE_EQ(r.fell_at, r.samples.back().time);
+}
+
+TEST(HumanoidClosedLoop, RejectsBadConfigurations) {
+  const Motion m = motion("I-standing");
+  ClosedLoopConfig config;
+  config.duration = -1.0;
+  EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+  config.duration = NAN;
+  EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+  config.duration = 0.1;
+  config.threads = 0;
+  EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+}
+
+TEST(HumanoidClosedLoop, MpcKindNamesRoundTrip) {
+  for (int kind = 0; kind < kMpcKinds; ++kind) {
+    MpcKind parsed = MpcKind::kFine;
+    ASSERT_TRUE(parse_mpc_kind(name_of(static_cast<MpcKind>(kind)), parsed));
+    EXPECT_EQ(static_cast<int>(parsed), kind);
+  }
+  MpcKind parsed = MpcKind::kFine;
+  EXPECT_FALSE(parse_mpc_kind("Coarse-Fast", parsed));
+  EXPECT_FALSE(parse_mpc_kind("", parsed));
+}
+
+// The log has one row per sample, every row as many columns as the header, and the columns
+// hold the samples' numbers.
+TEST(HumanoidClosedLoop, TrajectoryCsvHoldsEverySample) {
+  const Motion m = motion("I-standing");
+  const ClosedLoopRun r = run(m, MpcKind::kCoarse, 0.3);
+  std::stringstream csv;
+  write_trajectory_csv(csv, m, r);
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  const auto columns = [](const std::string& l) { return std::count(l.begin(), l.end(), ',') + 1; };
+  const auto header_columns = columns(line);
+  EXPECT_EQ(header_columns, 47);
+  EXPECT_EQ(line.rfind("time,base_x,base_y,base_z,", 0), 0u);
+  std::size_t rows = 0;
+  while (std::getline(csv, line)) {
+    ASSERT_EQ(columns(line), header_columns) << line;
+    std::stringstream fields(line);
+    double time = 0.0, x = 0.0, y = 0.0, z = 0.0;
+    char comma = 0;
+    fields >> time >> comma >> x >> comma >> y >> comma >> z;
+    EXPECT_NEAR(time, r.samples[rows].time, 1e-9);
+    EXPECT_NEAR(z, r.samples[rows].base.position.z(), 1e-8);
+    ++rows;
+  }
+  EXPECT_EQ(rows, r.samples.size());
+}
+
+// The stick figure stands on the ground: soles at the floor (within the contact's sink),
+// the head at the model's stature above it when straight.
+TEST(HumanoidClosedLoop, StickFigureOfAStance) {
+  const State x = standing_state(ProblemConfig{}, 0.85);
+  const StickFigure f = stick_figure(x);
+  for (int leg = 0; leg < 2; ++leg) {
+    EXPECT_NEAR(f.heel[leg].z(), 0.0, 0.01);
+    EXPECT_NEAR(f.toe[leg].z(), 0.0, 0.01);
+    EXPECT_GT(f.toe[leg].x(), f.heel[leg].x());
+    EXPECT_GT(f.knee[leg].z(), f.ankle[leg].z());
+  }
+  EXPECT_GT(f.hip[0].y(), f.hip[1].y());  // left is +y
+  EXPECT_GT(f.vertex.z(), 1.4);
+  EXPECT_LT(f.vertex.z(), 1.6);
+}
+
+}  // namespace
