@@ -314,4 +314,60 @@ TEST(HumanoidContact, SittingLoadsTheSeat) {
   EXPECT_LT(x.v.head<6>().norm(), 1e-2);
 }
 
+// The joints' end stops (Parameters::stop_*): negligible inside the range, restoring past it.
+TEST(HumanoidJointStops, QuietInsideTheRangeAndRestoringPastIt) {
+  const Parameters p;
+  const double lower = -0.5, upper = 0.5;
+  for (double q : {-0.3, 0.0, 0.3}) {
+    EXPECT_LT(std::abs(joint_stop(q, 1.0, lower, upper, p).torque), 0.01) << q;
+  }
+  const JointStop past_upper = joint_stop(upper + 0.05, 0.0, lower, upper, p);
+  // k d <= k s(d) <= k (d + w log 2): the softplus rounds the corner by at most w log 2.
+  EXPECT_LE(past_upper.torque, -p.stop_stiffness * 0.05);
+  EXPECT_GE(past_upper.torque, -p.stop_stiffness * (0.05 + p.stop_width * std::log(2.0)));
+  EXPECT_NEAR(past_upper.stiffness, p.stop_stiffness, 0.1 * p.stop_stiffness);
+  EXPECT_GT(joint_stop(lower - 0.05, 0.0, lower, upper, p).torque, 0.9 * p.stop_stiffness * 0.05);
+  // Damping opposes the rate at a stop, either way.
+  EXPECT_LT(joint_stop(upper + 0.05, 1.0, lower, upper, p).torque, past_upper.torque);
+  EXPECT_GT(joint_stop(upper + 0.05, -1.0, lower, upper, p).torque, past_upper.torque);
+  EXPECT_TRUE(std::isfinite(joint_stop(1e6, 0.0, lower, upper, p).torque));
+  EXPECT_TRUE(std::isfinite(joint_stop(-1e6, 0.0, lower, upper, p).torque));
+}
+
+// A lifted body, every joint driven by its full torque limit towards a limit for 0.5 s, on
+// the simulator's 1 ms sub-steps and the MPC model's 5 ms ones alike. Bounds from energy and
+// statics: slamming through a range at the torque limit stores at most tau_max * range, which
+// an undamped spring takes up over sqrt(2 tau_max range / k) = 0.62 rad (hip flexion: 150 N m
+// over 2.6 rad); at rest a joint sits tau_max / k = 0.075 rad past its limit (plus the corner).
+TEST(HumanoidJointStops, HoldJointsDrivenIntoThemAtFullTorque) {
+  const Model model;
+  for (double substep : {1e-3, 5e-3}) {
+    StepMap map(model, Parameters{}, ContactParameters{}, substep);
+    State x;
+    x.q.setZero();
+    x.q[3] = 1.0;
+    x.q[2] = 3.0;  // far above the ground: no contact
+    x.v.setZero();
+    JointVector tau;
+    for (int j = 0; j < kJoints; ++j) tau[j] = (j % 2 == 0 ? 1.0 : -1.0) * model.torque_limit[j];
+    double worst = 0.0, resting = 0.0;
+    for (int k = 0; k < 50; ++k) {
+      x = map.step(x, tau, 0.01);
+      resting = 0.0;
+      for (int j = 0; j < kJoints; ++j) {
+        const double q = x.q[7 + j];
+        resting = std::max({resting, q - model.joint_upper[j], model.joint_lower[j] - q});
+      }
+      worst = std::max(worst, resting);
+    }
+    std::printf("sub-step %.0f ms: worst excursion past a limit %.4f rad, at rest %.4f rad\n",
+                substep * 1e3, worst, resting);
+    EXPECT_TRUE(x.q.allFinite() && x.v.allFinite());
+    EXPECT_GT(worst, 0.0);  // the torques did push the joints into their stops
+    EXPECT_LT(worst, 0.62);
+    EXPECT_LT(resting, 0.075 + Parameters{}.stop_width);
+    EXPECT_LT(x.v.tail<kJoints>().cwiseAbs().maxCoeff(), 1.0);  // and they came to rest there
+  }
+}
+
 }  // namespace

@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <random>
@@ -169,6 +170,33 @@ TEST(HumanoidDerivatives, ShortenedSubStepsMatchTheReference) {
   std::printf("shortened sub-steps: worst column error fx %.1e, fu %.1e\n", fx, fu);
   EXPECT_LT(fx, kReferenceTolerance);
   EXPECT_LT(fu, kReferenceTolerance);
+}
+
+TEST(HumanoidDerivatives, JointsAtTheirStopsMatchTheRefinedReference) {
+  // The end stops (Parameters::stop_*), linearly implicit in the step map: knees 0.03 rad past
+  // full extension and moving further, a hip at its flexion limit, an ankle inside the stop's
+  // rounded corner; the body 3 cm above the ground.
+  const FullModel model;
+  const Model limits;
+  State x = standing();
+  x.q[2] += 0.03;
+  x.q[7 + kKnee] = limits.joint_lower[kKnee] - 0.03;
+  x.q[7 + kJointsPerLeg + kKnee] = limits.joint_lower[kKnee] - 0.03;
+  x.q[7 + kHipFlexion] = limits.joint_upper[kHipFlexion];
+  x.q[7 + kJointsPerLeg + kAnkle] = limits.joint_upper[kAnkle] - 0.01;
+  x.v.tail<kJoints>() << 0.5, 2.0, -3.0, 1.0, -0.5, 1.0, -2.5, 1.5;
+  JointVector tau;
+  tau << 5.0, 30.0, -40.0, 5.0, -5.0, 10.0, -40.0, 20.0;
+  double stop_torque = 0.0;
+  for (int j = 0; j < kJoints; ++j) {
+    stop_torque += std::abs(joint_stop(x.q[7 + j], x.v[kBaseDofs + j], limits.joint_lower[j],
+                                       limits.joint_upper[j], Parameters{}).torque);
+  }
+  ASSERT_GT(stop_torque, 100.0);  // the stops are engaged
+  const auto [fx, fu] = model.errors(x, tau, true);
+  std::printf("joints at their stops: worst column error fx %.1e, fu %.1e\n", fx, fu);
+  EXPECT_LT(fx, kRefinedTolerance);
+  EXPECT_LT(fu, kRefinedTolerance);
 }
 
 TEST(HumanoidDerivatives, SeatedMatchesTheReference) {

@@ -42,9 +42,11 @@ TEST(HumanoidFastSubsystem, EpsilonIsSmall) {
 TEST(HumanoidFastSubsystem, LegRowsAreTheFullModelsWithTheBaseHeld) {
   // Eq. 2.50b: M22 zeta_v' = p_z. Over one tiny sub-step the leg acceleration of step_legs must
   // satisfy the full model's inverse dynamics (RNEA, independent of the CRBA the step uses)
-  // with the base acceleration zero: leg rows of M [0; a_leg] + c = tau.
+  // with the base acceleration zero: leg rows of M [0; a_leg] + c = tau + tau_stop (the end
+  // stops).
   StepMap map;
-  const State x = airborne();
+  State x = airborne();
+  x.q[7 + kKnee] = -0.02;  // the left knee past full extension: its end stop engaged
   const JointVector tau = some_torques();
   const double h = 1e-6;
   const State next = map.step_legs(x, tau, h);
@@ -53,7 +55,18 @@ TEST(HumanoidFastSubsystem, LegRowsAreTheFullModelsWithTheBaseHeld) {
   Velocity a = Velocity::Zero();
   a.tail<kJoints>() = (next.v - x.v).tail<kJoints>() / h;
   const Velocity generalized = map.dynamics().inverse_dynamics(x.q, x.v, a);
-  EXPECT_LT((generalized.tail<kJoints>() - tau).norm(), 1e-6 * tau.norm());
+  const Model model;
+  // tau + tau_stop with the stops' linearly implicit terms (step.hpp, (S1)).
+  JointVector applied = tau;
+  for (int j = 0; j < kJoints; ++j) {
+    const double qdot = x.v[kBaseDofs + j];
+    const JointStop stop =
+        joint_stop(x.q[7 + j], qdot, model.joint_lower[j], model.joint_upper[j], Parameters{});
+    applied[j] += stop.torque - h * stop.stiffness * qdot -
+                  (h * stop.damping + h * h * stop.stiffness) * a[kBaseDofs + j];
+  }
+  EXPECT_GT((applied - tau).norm(), 1e-4);  // the state touches a stop: the test sees them
+  EXPECT_LT((generalized.tail<kJoints>() - applied).norm(), 1e-6 * tau.norm());
   EXPECT_LT((next.q.tail<kJoints>() - (x.q.tail<kJoints>() + h * next.v.tail<kJoints>())).norm(), 1e-15);
 }
 

@@ -66,9 +66,29 @@ double forward_step(double xi) { return detail::fd_step(xi, 0.5); }
 
 }  // namespace
 
+JointStop joint_stop(double q, double v, double lower, double upper, const Parameters& parameters) {
+  const double k = parameters.stop_stiffness, b = parameters.stop_damping, w = parameters.stop_width;
+  // s(d) = w log(1 + exp(d / w)) and sigma(d / w) = s'(d), written to stay finite for any d.
+  const auto softplus = [w](double d) { return d > 0.0 ? d + w * std::log1p(std::exp(-d / w)) : w * std::log1p(std::exp(d / w)); };
+  const auto logistic = [w](double d) { return d > 0.0 ? 1.0 / (1.0 + std::exp(-d / w)) : std::exp(d / w) / (1.0 + std::exp(d / w)); };
+  const double above = q - upper, below = lower - q;
+  const double gate = logistic(above) + logistic(below);
+  JointStop stop;
+  stop.torque = -k * softplus(above) + k * softplus(below) - b * gate * v;
+  stop.stiffness = k * gate;
+  stop.damping = b * gate;
+  return stop;
+}
+
 StepMap::StepMap(const Model& model, const Parameters& parameters, const ContactParameters& contact,
                  double max_substep)
-    : dynamics_(model), contact_(model, parameters, contact), max_substep_(max_substep) {}
+    : dynamics_(model), contact_(model, parameters, contact), parameters_(parameters),
+      joint_lower_(model.joint_lower), joint_upper_(model.joint_upper), max_substep_(max_substep) {}
+
+double StepMap::stop_term(int j, double q, double v, double a, double h) const {
+  const JointStop stop = joint_stop(q, v, joint_lower_[j], joint_upper_[j], parameters_);
+  return stop.torque - h * stop.stiffness * v - (h * stop.damping + h * h * stop.stiffness) * a;
+}
 
 const ContactState& StepMap::evaluate_contact(const State& x) {
   dynamics_.set_configuration(x.q);
@@ -172,6 +192,12 @@ Velocity StepMap::acceleration(const State& x, const JointVector& tau, double h,
     iteration_matrix_.noalias() -=
         h * contact.jacobian[i].transpose() * contact.force_velocity[i] * contact.jacobian[i];
   }
+  for (int j = 0; j < kJoints; ++j) {
+    const double qdot = x.v[kBaseDofs + j];
+    const JointStop stop = joint_stop(x.q[kFirstJoint + j], qdot, joint_lower_[j], joint_upper_[j], parameters_);
+    rhs[kBaseDofs + j] += stop.torque - h * stop.stiffness * qdot;
+    iteration_matrix_(kBaseDofs + j, kBaseDofs + j) += h * stop.damping + h * h * stop.stiffness;
+  }
   Velocity a = Velocity::Zero();
   if (base_held) {
     leg_cholesky_.compute(iteration_matrix_.bottomRightCorner<kJoints, kJoints>());
@@ -204,6 +230,12 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
     damping_acceleration_.noalias() += J.transpose() * (contact_state_.force_velocity[k] * (J * a));
     contact_terms_[k] = contact_term(J, contact_state_.force[k], contact_state_.force_velocity[k], a, h);
   }
+  // The end stops' d(b - A a)/dh: -(B + 2 h K) a - K qdot per joint.
+  for (int j = 0; j < kJoints; ++j) {
+    const int i = kBaseDofs + j;
+    const JointStop stop = joint_stop(x.q[kFirstJoint + j], x.v[i], joint_lower_[j], joint_upper_[j], parameters_);
+    damping_acceleration_[i] -= (stop.damping + 2.0 * h * stop.stiffness) * a[i] + stop.stiffness * x.v[i];
+  }
   const Velocity dynamics_term = dynamics_.inverse_dynamics(x.v, a);
 
   // Columns by forward differences, r(x + d e_i) - r(x) over d. First v's, while
@@ -221,6 +253,11 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
       Matrix3 dforce;
       const Vector3 force = contact_.force_at(k, contact_state_.position[k], J * v, dforce);
       change += contact_term(J, force, dforce, a, h) - contact_terms_[k];
+    }
+    if (i >= kBaseDofs) {
+      const int joint = i - kBaseDofs;
+      const double q_joint = x.q[kFirstJoint + joint];
+      change[i] += stop_term(joint, q_joint, v[i], a[i], h) - stop_term(joint, q_joint, x.v[i], a[i], h);
     }
     residual_jacobian_.col(q_count + j) = change / d;
   }
@@ -251,6 +288,10 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
         change += contact_term(contact_state_.jacobian[k], contact_state_.force[k],
                                contact_state_.force_velocity[k], a, h) -
                   contact_terms_[k];
+      }
+      if (i >= kFirstJoint) {
+        const int joint = i - kFirstJoint, row = kBaseDofs + joint;
+        change[row] += stop_term(joint, q[i], x.v[row], a[row], h) - stop_term(joint, x.q[i], x.v[row], a[row], h);
       }
     }
     residual_jacobian_.col(j) = change / d;

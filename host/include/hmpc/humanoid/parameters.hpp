@@ -76,6 +76,24 @@ struct Parameters {
       2.3562,    // knee flexion 135 deg
       0.3491};   // ankle dorsiflexion 20 deg
 
+  // End stops at the range-of-motion limits, as in a human joint's ligaments and bone contact
+  // (the thesis's model has none; without them the optimiser spun the light feet through
+  // hundreds of radians and bent knees backwards). Beyond a limit by d, a one-sided spring
+  // k s(d) with s the softplus w log(1 + exp(d / w)) and damping b sigma(d / w) q_dot, sigma the
+  // logistic function: smooth, as gradient-based optimisation needs, and below 0.01 N m
+  // 0.2 rad inside the range (at 1 rad/s). Choices: k = 2000 N m/rad holds a joint pushed by
+  // its largest torque limit (150 N m) 0.075 rad (4 degrees) past its limit; b = 20 N m s/rad
+  // damps the foot (3.5e-3 kg m^2 about the ankle) past critical and the whole leg about the
+  // hip (~1.5 kg m^2) at 0.2 of critical; w = 0.02 rad rounds the corner. Stiffer or sharper
+  // stops broke the MPC (measured on motion I, Coarse MPC, 2 s: k = 1e4 or w = 0.01 left the
+  // iLQR at its 6-iteration cap every sample, the accumulated cost rising from 35 to
+  // 3.3e3-1.3e4, the robot shuffling; k = 2000 with w = 0.02 leaves it at 35.3, as without
+  // stops). The step map treats both terms linearly implicitly (step.hpp), so the stiffness
+  // does not limit its sub-step.
+  double stop_stiffness = 2000.0;  // [N m/rad]
+  double stop_damping = 20.0;      // [N m s/rad]
+  double stop_width = 0.02;        // [rad]
+
   // Torque limits [N m], symmetric. The thesis gives none: choice of roughly 3 N m per kg of
   // body mass at the hip and knee (peak isometric human values for a 47 kg adult are of this
   // order), less for abduction and the ankle.

@@ -1,8 +1,9 @@
 // The humanoid's discrete step map x_{k+1} = step(x_k, tau, dt) for the MPC and the 1 ms
 // simulator (thesis Sec. 2.6.2: x = (q, v), n = 29; u = the 8 joint torques).
 //
-// Dynamics: M(q) a + c(q, v) = S^T tau + J(q)^T f(q, v) + tau_ext (dynamics.hpp, contact.hpp),
-// S = [0 1] selecting the actuated joints; tau_ext an optional generalized disturbance.
+// Dynamics: M(q) a + c(q, v) = S^T (tau + tau_stop(q, v)) + J(q)^T f(q, v) + tau_ext
+// (dynamics.hpp, contact.hpp), S = [0 1] selecting the actuated joints, tau_stop the joints'
+// end stops (Parameters::stop_*), tau_ext an optional generalized disturbance.
 //
 // Integration (per sub-step of length h): semi-implicit (symplectic) Euler, velocity first,
 // with the contact's velocity dependence taken linearly implicitly:
@@ -10,7 +11,10 @@
 //   v+ = v + dv,
 //   p+ = p + h R(quat) v_o+,  quat+ = normalise(quat (x) exp(h omega+ / 2)),           (S2)
 //   joints+ = joints + h qdot+,
-// with D_i = df_i / dp_dot (ContactModel::point_force). (S1) is one Newton step of backward
+// with D_i = df_i / dp_dot (ContactModel::point_force). The end stops enter the same way, per
+// joint j, with K_j and B_j their stiffness and damping (joint_stop): h B_j + h^2 K_j added to
+// A's diagonal and h (tau_stop + h (-K_j) qdot_j) to the bracket, linearly implicit in both
+// the spring and the damper, so that a stiff stop needs no shorter sub-step. (S1) is one Newton step of backward
 // Euler on the contact damping and friction (as in MuJoCo's implicit damping): friction's
 // viscous slope mu F_n / v_s = 4.6e3 N s/m per point makes explicit Euler unstable at a free
 // foot (h b / m ~ 30 for 0.61 kg at h = 1 ms), while the implicit form is stable for any
@@ -37,6 +41,7 @@
 //   dv+ = h A^-1 (dr/dx dx + S^T dtau + sum_i J_i^T D_i J_i a dh) + a dh,                (L1)
 //   r(x') = b(x') - A(x') a
 //         = S^T tau + tau_ext - (M(q') a + c(q', v')) + sum_i J_i^T (f_i + h D_i J_i a)  (L2)
+//           + S^T (tau_stop - h K qdot - (h B + h^2 K) a_joints)  (at q', v')
 // with J_i, f_i, D_i at x' = (q', v'). M a + c is one RNEA call, so a column of dr/dx costs
 // no CRBA and no factorisation (the nominal Cholesky of A serves every column); a v column
 // needs no kinematics (J depends on q only), a base translation changes only the contact
@@ -66,6 +71,14 @@ struct State {
   Configuration q;
   Velocity v;
 };
+
+// The end stops' torque on one joint at angle q and rate v (Parameters::stop_*), with the
+// slopes the step map treats implicitly: stiffness = -d(spring torque)/dq >= 0 and
+// damping = -d(torque)/dv >= 0.
+struct JointStop {
+  double torque = 0.0, stiffness = 0.0, damping = 0.0;
+};
+JointStop joint_stop(double q, double v, double lower, double upper, const Parameters& parameters);
 
 // Jacobians of a step, x = (q, v) stacked (29) and the legs' z = (q_leg, v_leg) (16).
 constexpr int kLegStateSize = 2 * kJoints;
@@ -137,9 +150,9 @@ class StepMap {
                         bool base_held);
   // For the linearisation, right after acceleration(x, ...) returned a: dr/dx of (L2) into
   // residual_jacobian_ by forward differences, its first q_count columns for q's entries
-  // from first_q, the next v_count for v's from first_v; and sum_i J_i^T D_i J_i a into
-  // damping_acceleration_ (for dv+/dh). Leaves contact_state_, kinematics_ and the
-  // dynamics at perturbed states.
+  // from first_q, the next v_count for v's from first_v; and d(b - A a)/dh, sum_i J_i^T D_i
+  // J_i a plus the end stops' part, into damping_acceleration_ (for dv+/dh). Leaves
+  // contact_state_, kinematics_ and the dynamics at perturbed states.
   void residual_jacobian(const State& x, const Velocity& a, double h, int first_q, int q_count,
                          int first_v, int v_count);
   // One sub-step of linearise() (linearise_legs()): x moved as by substep(), fx and fu
@@ -149,8 +162,14 @@ class StepMap {
   void linearised_leg_substep(State& x, const JointVector& tau, double h, const LegStateRow& dh_z,
                               const ControlRow& dh_u, LegStepJacobian& fz, LegControlJacobian& fu);
 
+  // The end stops' part of (L2)'s r for joint j at (q, v) and the nominal acceleration a
+  // (see step.hpp's file comment).
+  double stop_term(int j, double q, double v, double a, double h) const;
+
   Dynamics dynamics_;
   ContactModel contact_;
+  Parameters parameters_;  // the end stops'
+  JointVector joint_lower_, joint_upper_;
   double max_substep_;
   // Workspace.
   Kinematics kinematics_;
