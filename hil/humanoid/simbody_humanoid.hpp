@@ -15,17 +15,40 @@
 //    index of each is looked up once.
 // With T the orthogonal matrix u = T v: M = T^T M_S T, c = T^T (c_S + M_S d), tau_S = T tau,
 // a = T^T (udot - d), d = (0, 0, 0, R (omega x v_o), 0...).
+//
+// Ground contact (optional, the second constructor): the 8 sole points of our ContactModel
+// (contact.hpp, the one source of their positions), each a small sphere against the ground
+// half space z < 0 in Simbody's own smooth Hunt-Crossley element SmoothSphereHalfSpaceForce
+// (in Simbody 3.7, by G. Serrancoli and A. Falisse). The laws differ in form:
+//   ours (C2)  F = k delta (1 + c delta_dot)                linear spring
+//   Simbody    F = K delta^(3/2) (1 + (3/2) c_S delta_dot)   Hertz sphere, K from E and R
+// so their parameters are mapped to agree where standing puts them (hertz_modulus in the .cpp):
+//  - stiffness: the modulus E that sinks a point by our W / (8 k) under the standing load
+//    W / 8 (Simbody's smoothing factors included), so the static pose is the same; Hertz is
+//    then about 3/2 as stiff as ours for small motions about it (dF/ddelta = 1.5 F / delta);
+//  - dissipation: c_S = c / 1.5, the same damping k delta c per point at the same load;
+//  - friction: static = dynamic = mu, transition velocity = v_s: the same Coulomb limit and
+//    the same viscous slope mu F_n / v_s below it (Simbody's friction is linear up to v_s and
+//    flat beyond it, ours saturates smoothly).
+// Simbody applies a point's force at the sphere's lowest point raised by half the penetration
+// (its source, after Sherman et al. 2011), ours at the sole point itself: 5 mm higher at the
+// standing sink, which only moves where friction acts. The chair (motion IV) is not mirrored.
 #pragma once
 
+#include <array>
 #include <memory>
 
+#include "hmpc/humanoid/contact.hpp"
 #include "hmpc/humanoid/model.hpp"
+#include "hmpc/humanoid/step.hpp"
 
 namespace hmpc::hil {
 
 class SimbodyHumanoid {
  public:
   explicit SimbodyHumanoid(const humanoid::Model& model = humanoid::Model{});
+  // With ground contact at `contact`'s sole points, its parameters mapped as above.
+  SimbodyHumanoid(const humanoid::Model& model, const humanoid::ContactModel& contact);
   ~SimbodyHumanoid();
   SimbodyHumanoid(const SimbodyHumanoid&) = delete;
   SimbodyHumanoid& operator=(const SimbodyHumanoid&) = delete;
@@ -33,12 +56,25 @@ class SimbodyHumanoid {
   // Our q and v (model.hpp); the quaternion is normalised.
   void set_state(const humanoid::Configuration& q, const humanoid::Velocity& v);
 
+  // Our q and v at the current state.
+  humanoid::State state();
+
   // In our coordinates, from Simbody's calcM, calcResidualForceIgnoringConstraints (zero udot,
-  // gravity applied) and realize(Acceleration) with tau as applied mobility forces.
+  // gravity applied) and realize(Acceleration) with tau as applied mobility forces (and the
+  // contact forces, if any).
   humanoid::MassMatrix mass_matrix();
   humanoid::Velocity bias_forces();
   humanoid::Velocity forward_dynamics(const humanoid::Velocity& tau);
   double kinetic_energy();
+
+  // Advances the state by dt under gravity, the contact and the joint torques tau held over
+  // dt (zero-order hold, as StepMap::step), with Simbody's error-controlled Runge-Kutta-Merson.
+  void step(const humanoid::JointVector& tau, double dt);
+  // Ground force on each sole point at the current state (world), indexed as ContactModel's
+  // points (0-3 left foot, 4-7 right); zero without contact.
+  std::array<humanoid::Vector3, humanoid::kSolePoints> sole_forces();
+  // Integrator steps taken by step() so far.
+  int integrator_steps() const;
 
  private:
   struct Impl;
