@@ -6,6 +6,7 @@
 #include <string>
 
 #include "hmpc/cli/arguments.hpp"
+#include "hmpc/humanoid/physical_checks.hpp"
 #include "hmpc/humanoid/viewing.hpp"
 
 namespace {
@@ -99,6 +100,12 @@ int main(int argc, char** argv) {
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
   if (run.fell()) std::printf("the robot FELL at %.2f s (base point below %.2f m)\n", run.fell_at, config.fallen_height);
 
+  const std::string numeral = motion_numeral(stem);
+  if (!numeral.empty()) {
+    const PhysicalCheck check = check_motion(numeral, motion, run);
+    std::printf("physical check of motion %s: %s: %s\n", numeral.c_str(), check.passed ? "PASSED" : "FAILED",
+                check.verdict.c_str());
+  }
   const std::string title = stem + ", " + name_of(config.mpc) + " MPC";
   if (!write_run(out, title, motion, run, frames, error)) {
     std::fprintf(stderr, "hmpc-humanoid: %s\n", error.c_str());

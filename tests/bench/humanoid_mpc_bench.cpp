@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "hmpc/humanoid/closed_loop.hpp"
+#include "hmpc/humanoid/physical_checks.hpp"
 
 namespace {
 
@@ -109,10 +109,12 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
         const ClosedLoopSummary s = summarise(run);
         if (config.mpc == MpcKind::kFine) fine_cost = s.total_cost;
         char outcome[64];
+        const PhysicalCheck check = check_motion(motion_numeral(file), motion, run);
         if (run.fell()) {
           std::snprintf(outcome, sizeof outcome, "fell at %.2f s", run.fell_at);
         } else {
-          std::snprintf(outcome, sizeof outcome, "base %.2f-%.2f m", s.min_height, s.max_height);
+          std::snprintf(outcome, sizeof outcome, "check %s, base %.2f-%.2f m", check.passed ? "passed" : "FAILED",
+                        s.min_height, s.max_height);
         }
         std::printf("%-22s %-12s %-5s %9.1f %9.1f %6.2f %5d %11.1f %9.3f %s\n", file.c_str(),
                     name_of(config.mpc), warm ? "yes" : "no", s.max_solve_ms, s.median_solve_ms,

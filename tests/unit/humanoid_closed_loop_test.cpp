@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "hmpc/humanoid/physical_checks.hpp"
 #include "hmpc/humanoid/viewing.hpp"
 
 namespace {
@@ -50,6 +51,72 @@ TEST(HumanoidClosedLoop, CoarseFastStandsFiveSeconds) {
   // Standing load about m g: the smooth contact carries the body (no sinking, no bouncing).
   const ClosedLoopSample& last = r.samples.back();
   EXPECT_NEAR(last.left_force + last.right_force, weight, 0.05 * weight);
+  const PhysicalCheck check = check_motion("I", motion("I-standing"), r);
+  EXPECT_TRUE(check.passed) << check.verdict;
+}
+
+// The checks themselves, on made-up runs: each passes what it should and fails what it should.
+ClosedLoopSample sample(double t, double z, double left, double right) {
+  ClosedLoopSample s;
+  s.time = t;
+  s.base.quaternion = Eigen::Vector4d(1.0, 0.0, 0.0, 0.0);
+  s.base.position = Vector3(0.0, 0.0, z);
+  s.left_force = left;
+  s.right_force = right;
+  return s;
+}
+
+TEST(HumanoidPhysicalChecks, StandingBand) {
+  const Motion m = motion("I-standing");
+  ClosedLoopRun run;
+  for (int k = 1; k <= 100; ++k) run.samples.push_back(sample(0.03 * k, 0.85, 230.0, 230.0));
+  EXPECT_TRUE(check_motion("I", m, run).passed);
+  run.samples[50].base.position.z() = 0.79;
+  EXPECT_FALSE(check_motion("I", m, run).passed);
+  run.fell_at = 1.0;
+  EXPECT_FALSE(check_motion("I", m, run).passed);
+  EXPECT_EQ(check_motion("I", m, run).verdict, "fell at 1.00 s");
+}
+
+TEST(HumanoidPhysicalChecks, JumpNeedsAFlightAndAnUprightLanding) {
+  const Motion m = motion("V-low-jump");
+  ClosedLoopRun run;
+  for (int k = 1; k <= 100; ++k) {
+    const bool flying = k == 30 || k == 31;
+    run.samples.push_back(sample(0.03 * k, flying ? 1.1 : 0.85, flying ? 0.0 : 230.0, flying ? 0.0 : 230.0));
+  }
+  EXPECT_TRUE(check_motion("V", m, run).passed) << check_motion("V", m, run).verdict;
+  EXPECT_DOUBLE_EQ(apex_height(run), 1.1);
+  run.samples[30].left_force = 100.0;  // a 30 ms hop is no flight phase
+  EXPECT_FALSE(check_motion("V", m, run).passed);
+  run.samples[30].left_force = 0.0;
+  run.samples.back().base.position.z() = 0.7;  // landed low
+  EXPECT_FALSE(check_motion("V", m, run).passed);
+}
+
+TEST(HumanoidPhysicalChecks, WalkingNeedsSpeedAndAlternatingSteps) {
+  const Motion m = motion("II-walking");
+  const double speed = m.phase_at(0.0).velocity.x();
+  ClosedLoopRun run;
+  for (int k = 1; k <= 100; ++k) {
+    const double t = 0.03 * k;
+    // Feet in turn: a foot off the ground for 3 samples in every 10, the other loaded.
+    const int phase = k % 10;
+    ClosedLoopSample s = sample(t, 0.85, phase < 3 ? 0.0 : 230.0, phase >= 5 && phase < 8 ? 0.0 : 230.0);
+    s.base.position.x() = speed * t;
+    run.samples.push_back(s);
+  }
+  EXPECT_TRUE(check_motion("II", m, run).passed) << check_motion("II", m, run).verdict;
+  EXPECT_FALSE(check_motion("III", motion("III-running"), run).passed);  // too slow, no flight
+  for (ClosedLoopSample& s : run.samples) s.base.position.x() *= 0.7;
+  EXPECT_FALSE(check_motion("II", m, run).passed);
+}
+
+TEST(HumanoidPhysicalChecks, MotionNumerals) {
+  EXPECT_EQ(motion_numeral("VIII-double-flip"), "VIII");
+  EXPECT_EQ(motion_numeral("I-standing"), "I");
+  EXPECT_EQ(motion_numeral("reaching"), "");
+  EXPECT_FALSE(check_motion("IX", Motion{}, ClosedLoopRun{}).passed);
 }
 
 // Figs. 2.10/2.12's ordering on motion I: Coarse-Fast's accumulated cost below Coarse's, and

@@ -140,7 +140,7 @@ ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& conf
   ThreadPool* workers = config.threads > 1 ? &pool : nullptr;
   ProblemConfig start = config.problem;
   start.contact = contact_for(motion, config.problem.contact);
-  const State initial = standing_state(start, motion.phase_at(0.0).height);
+  const State initial = standing_state(start, kStartHeight);
   switch (config.mpc) {
     case MpcKind::kFine: {
       const auto mpc = make_single_layer<kFineHorizon>(motion, initial, workers, config.problem, kFineStep);

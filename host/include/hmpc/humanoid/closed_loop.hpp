@@ -71,7 +71,12 @@ struct ClosedLoopRun {
   bool fell() const { return fell_at >= 0.0; }
 };
 
-// Runs `motion` from standing_state at its first phase's height. Throws std::invalid_argument
+// Every motion starts standing quietly (standing_state) at motion I's height, Table 2.2: the
+// first phases of IV (0.65 m, sitting down) and VII-VIII (0 m, a crouch the legs cannot reach)
+// are targets to move towards, not poses to start in.
+constexpr double kStartHeight = 0.85;
+
+// Runs `motion` from standing_state at kStartHeight. Throws std::invalid_argument
 // for a negative or non-finite duration or threads outside 1..64.
 ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
 

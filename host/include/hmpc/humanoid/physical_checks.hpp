@@ -1,0 +1,42 @@
+// Did the motion really happen? Issue 5's physical checks of a closed-loop run
+// (closed_loop.hpp), one per motion of Tables 2.2-2.3, with thresholds from physics:
+//   I     standing: base point at 0.85 +- 0.05 m throughout (Table 2.2's target; 5 cm is a
+//         knee bend of a few degrees, a fall leaves it within a few hundred ms);
+//   II    walking at 1.2 m/s, III running at 2.0 m/s: mean forward speed after the first
+//         0.5 s (the start from rest) at least 80 % of the target, at least 4 touchdowns with
+//         the feet alternating (a touchdown: a foot's vertical load rising through 10 % of
+//         m g, well above contact noise and far below a stance's 50 %); III also with
+//         flight phases, both feet unloaded in at least 3 samples;
+//   IV    sitting: the seat carrying at least half the weight with the base point below
+//         0.72 m (within 7 cm of Table 2.3's 0.65 m: the seat's 0.50 m height plus our
+//         pelvis), then standing: the last 0.3 s unloaded seat and base at 0.85 +- 0.05 m;
+//   V-VII jumps: a flight phase, both feet unloaded for at least 2 consecutive samples
+//         (60 ms: longer than a stumble's lift-off), and an upright landing: the last 0.3 s
+//         on the feet, base at 0.85 +- 0.05 m, torso tilt below 0.3 rad; VI also the yaw
+//         turned by pi +- 0.3 rad; VII's apex above V's (checked across runs by the caller);
+//   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
+//         full rotations), a flight phase, and an upright landing as for V-VII.
+// Every motion also must not have fallen (closed_loop.hpp's fallen_height).
+#pragma once
+
+#include <string>
+
+#include "hmpc/humanoid/closed_loop.hpp"
+
+namespace hmpc::humanoid {
+
+struct PhysicalCheck {
+  bool passed = false;
+  std::string verdict;  // what was measured against what was required
+};
+
+// The motion's numeral (I..VIII) from a motion file name such as "II-walking"; empty if none.
+std::string motion_numeral(const std::string& name);
+
+// The check for motion `numeral` (I..VIII). An unknown numeral fails with a verdict saying so.
+PhysicalCheck check_motion(const std::string& numeral, const Motion& motion, const ClosedLoopRun& run);
+
+// The highest base point of a run [m] (VII against V).
+double apex_height(const ClosedLoopRun& run);
+
+}  // namespace hmpc::humanoid

@@ -1,0 +1,202 @@
+#include "hmpc/humanoid/physical_checks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace hmpc::humanoid {
+namespace {
+
+constexpr double kWeight = 47.0 * 9.81;        // m g [N], thesis Sec. 2.5.1
+constexpr double kUnloaded = 0.1 * kWeight;    // a foot's load below this: off the ground
+constexpr double kStandingHeight = 0.85;       // Table 2.2
+constexpr double kHeightBand = 0.05;
+constexpr double kSettle = 0.3;                // [s] the landing/standing window at the end
+constexpr double kPi = 3.14159265358979323846;
+
+std::string format(const char* pattern, double a = 0.0, double b = 0.0, double c = 0.0) {
+  char text[256];
+  std::snprintf(text, sizeof text, pattern, a, b, c);
+  return text;
+}
+
+bool airborne(const ClosedLoopSample& s) { return s.left_force < kUnloaded && s.right_force < kUnloaded; }
+
+// Longest run of consecutive samples with both feet unloaded, and how many such samples.
+void flight(const ClosedLoopRun& run, int& longest, int& total) {
+  longest = total = 0;
+  int current = 0;
+  for (const ClosedLoopSample& s : run.samples) {
+    current = airborne(s) ? current + 1 : 0;
+    total += airborne(s) ? 1 : 0;
+    longest = std::max(longest, current);
+  }
+}
+
+// Touchdowns in order, 0 left, 1 right, as a string ("0101...").
+std::string touchdowns(const ClosedLoopRun& run) {
+  std::string order;
+  bool loaded[2] = {true, true};
+  for (const ClosedLoopSample& s : run.samples) {
+    const double force[2] = {s.left_force, s.right_force};
+    for (int foot = 0; foot < 2; ++foot) {
+      const bool now = force[foot] >= kUnloaded;
+      if (now && !loaded[foot]) order += static_cast<char>('0' + foot);
+      loaded[foot] = now;
+    }
+  }
+  return order;
+}
+
+double tilt(const ClosedLoopSample& s) {
+  // Angle of the torso's z axis from the vertical: cos = 1 - 2 (x^2 + y^2) of the quaternion.
+  const Eigen::Vector4d& q = s.base.quaternion;
+  return std::acos(std::clamp(1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]), -1.0, 1.0));
+}
+
+double yaw(const ClosedLoopSample& s) {
+  const Eigen::Vector4d& q = s.base.quaternion;  // (w, x, y, z)
+  return std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
+}
+
+// The last kSettle seconds: on the feet, base point in the standing band, upright.
+bool lands_upright(const ClosedLoopRun& run, std::string& verdict) {
+  const double end = run.samples.back().time;
+  double low = 1e9, high = -1e9, worst_tilt = 0.0;
+  bool on_feet = true;
+  for (const ClosedLoopSample& s : run.samples) {
+    if (s.time < end - kSettle) continue;
+    low = std::min(low, s.base.position.z());
+    high = std::max(high, s.base.position.z());
+    worst_tilt = std::max(worst_tilt, tilt(s));
+    on_feet = on_feet && !airborne(s);
+  }
+  verdict += format("; last 0.3 s: base %.3f..%.3f m, tilt up to %.2f rad", low, high, worst_tilt) +
+             (on_feet ? ", on its feet" : ", not on its feet");
+  return on_feet && low >= kStandingHeight - kHeightBand && high <= kStandingHeight + kHeightBand &&
+         worst_tilt < 0.3;
+}
+
+PhysicalCheck standing(const ClosedLoopRun& run) {
+  double low = 1e9, high = -1e9;
+  for (const ClosedLoopSample& s : run.samples) {
+    low = std::min(low, s.base.position.z());
+    high = std::max(high, s.base.position.z());
+  }
+  PhysicalCheck c;
+  c.passed = low >= kStandingHeight - kHeightBand && high <= kStandingHeight + kHeightBand;
+  c.verdict = format("base point %.3f..%.3f m (required 0.80..0.90)", low, high);
+  return c;
+}
+
+PhysicalCheck locomotion(const Motion& motion, const ClosedLoopRun& run, bool running) {
+  const double target = motion.phase_at(0.0).velocity.x();
+  const ClosedLoopSample* start = nullptr;
+  for (const ClosedLoopSample& s : run.samples) {
+    if (s.time >= 0.5) {
+      start = &s;
+      break;
+    }
+  }
+  PhysicalCheck c;
+  if (start == nullptr || run.samples.back().time - start->time < 0.5) {
+    c.verdict = "the run is too short to measure a speed";
+    return c;
+  }
+  const ClosedLoopSample& last = run.samples.back();
+  const double speed = (last.base.position.x() - start->base.position.x()) / (last.time - start->time);
+  const std::string order = touchdowns(run);
+  int alternations = 0;
+  for (std::size_t i = 1; i < order.size(); ++i) alternations += order[i] != order[i - 1] ? 1 : 0;
+  const bool alternating = order.size() >= 4 && alternations >= static_cast<int>(order.size()) - 2;
+  int longest = 0, flying = 0;
+  flight(run, longest, flying);
+  c.passed = speed >= 0.8 * target && alternating && (!running || flying >= 3);
+  c.verdict = format("mean forward speed %.2f m/s (required >= %.2f)", speed, 0.8 * target) +
+              ", touchdowns " + (order.empty() ? std::string("none") : order) +
+              (alternating ? " (alternating)" : " (not alternating)") +
+              format(", %d samples with both feet off the ground", flying);
+  return c;
+}
+
+PhysicalCheck sitting(const ClosedLoopRun& run) {
+  bool sat = false;
+  double lowest_seated = 1e9;
+  for (const ClosedLoopSample& s : run.samples) {
+    if (s.seat_force >= 0.5 * kWeight && s.base.position.z() <= 0.72) {
+      sat = true;
+      lowest_seated = std::min(lowest_seated, s.base.position.z());
+    }
+  }
+  const double end = run.samples.back().time;
+  double low = 1e9, high = -1e9, seat = 0.0;
+  for (const ClosedLoopSample& s : run.samples) {
+    if (s.time < end - kSettle) continue;
+    low = std::min(low, s.base.position.z());
+    high = std::max(high, s.base.position.z());
+    seat = std::max(seat, s.seat_force);
+  }
+  PhysicalCheck c;
+  const bool stood = seat < kUnloaded && low >= kStandingHeight - kHeightBand &&
+                     high <= kStandingHeight + kHeightBand;
+  c.passed = sat && stood;
+  c.verdict = (sat ? format("sat (base down to %.3f m on the seat)", lowest_seated)
+                   : std::string("never sat (seat load >= m g / 2 with the base below 0.72 m)")) +
+              format("; last 0.3 s: base %.3f..%.3f m, seat load up to %.0f N", low, high, seat);
+  return c;
+}
+
+PhysicalCheck jump(const ClosedLoopRun& run, double turn, double pitch_rotations) {
+  int longest = 0, flying = 0;
+  flight(run, longest, flying);
+  PhysicalCheck c;
+  c.verdict = format("longest flight %.0f ms, apex %.3f m", longest * kSamplingPeriod * 1e3, apex_height(run));
+  bool passed = longest >= 2;
+  if (turn != 0.0) {
+    const double turned = std::abs(yaw(run.samples.back()));
+    c.verdict += format(", yaw turned %.2f rad (required %.2f +- 0.3)", turned, turn);
+    passed = passed && std::abs(turned - turn) <= 0.3;
+  }
+  if (pitch_rotations != 0.0) {
+    double pitch = 0.0;
+    for (const ClosedLoopSample& s : run.samples) pitch += s.base.angular_velocity.y() * kSamplingPeriod;
+    const double required = 2.0 * kPi * pitch_rotations - 0.5;
+    c.verdict += format(", pitch rotated %.2f rad (required >= %.2f)", pitch, required);
+    passed = passed && pitch >= required;
+  }
+  passed = lands_upright(run, c.verdict) && passed;
+  c.passed = passed;
+  return c;
+}
+
+}  // namespace
+
+std::string motion_numeral(const std::string& name) {
+  const std::size_t dash = name.find('-');
+  const std::string numeral = name.substr(0, dash);
+  for (const char* known : {"I", "II", "III", "IV", "V", "VI", "VII", "VIII"}) {
+    if (numeral == known) return numeral;
+  }
+  return {};
+}
+
+double apex_height(const ClosedLoopRun& run) {
+  double apex = -1e9;
+  for (const ClosedLoopSample& s : run.samples) apex = std::max(apex, s.base.position.z());
+  return apex;
+}
+
+PhysicalCheck check_motion(const std::string& numeral, const Motion& motion, const ClosedLoopRun& run) {
+  if (run.samples.empty()) return {false, "no samples"};
+  if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
+  if (numeral == "I") return standing(run);
+  if (numeral == "II") return locomotion(motion, run, false);
+  if (numeral == "III") return locomotion(motion, run, true);
+  if (numeral == "IV") return sitting(run);
+  if (numeral == "V" || numeral == "VII") return jump(run, 0.0, 0.0);
+  if (numeral == "VI") return jump(run, kPi, 0.0);
+  if (numeral == "VIII") return jump(run, 0.0, 2.0);
+  return {false, "no physical check for motion '" + numeral + "'"};
+}
+
+}  // namespace hmpc::humanoid
