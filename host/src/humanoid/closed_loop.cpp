@@ -52,6 +52,27 @@ bool stopped_early(const CoarseFast& mpc) {
 
 bool finite(const State& x) { return x.q.allFinite() && x.v.allFinite(); }
 
+// The truncation (ClosedLoopConfig::truncate): called before each iteration of either layer,
+// it stops the solve when the longest iteration seen so far in this update would no longer
+// end before the deadline, so that a solve ends within the sampling time instead of
+// overrunning it by its last iteration. The first iteration always runs.
+class DeadlineStop {
+ public:
+  DeadlineStop(Clock::time_point deadline, bool enabled) : deadline_(deadline), enabled_(enabled) {}
+  bool operator()() {
+    const Clock::time_point now = Clock::now();
+    if (started_) longest_ = std::max(longest_, now - last_);
+    started_ = true;
+    last_ = now;
+    return enabled_ && now + longest_ >= deadline_;
+  }
+
+ private:
+  Clock::time_point deadline_, last_{};
+  Clock::duration longest_{0};
+  bool enabled_, started_ = false;
+};
+
 template <class Mpc>
 ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
                        const State& initial, double duration) {
@@ -72,10 +93,10 @@ ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& c
     const double t0 = k * kSamplingPeriod;
     problem_of(mpc).set_start_time(t0);
     const auto start = Clock::now();
-    const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
-                                      std::chrono::duration<double>(kSamplingPeriod));
-    const bool truncate = config.truncate;
-    mpc.update(to_vector(x), [&] { return truncate && Clock::now() >= deadline; });
+    DeadlineStop stop(start + std::chrono::duration_cast<Clock::duration>(
+                                  std::chrono::duration<double>(kSamplingPeriod)),
+                      config.truncate);
+    mpc.update(to_vector(x), stop);
     ClosedLoopSample sample;
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);

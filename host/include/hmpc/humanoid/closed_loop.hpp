@@ -6,8 +6,9 @@
 //   Coarse MPC       30 ms steps, N = 10: the input of step 0 is applied for 30 ms;
 //   Coarse-Fast MPC  30 ms / 10 ms, N_c = N_f = 10 (coarse_fast.hpp): the composed inputs
 //                    (Eq. 2.36) of fine steps 0-2.
-// iLQR cap 6 and tolerance 5e-2 for every layer; with `truncate` a solve that runs past the
-// sampling time is stopped there (by wall clock, as in the thesis) and its best plan is used.
+// iLQR cap 6 and tolerance 5e-2 for every layer; with `truncate` a solve is stopped at the
+// sampling time (by wall clock, as in the thesis) and its best plan is used: an iteration is
+// started only if the longest one so far in the update would still end before it.
 #pragma once
 
 #include <string>
