@@ -110,9 +110,14 @@ class TwoLayerMpc {
   // Eq. 2.36; later inputs of the composed plan are available from planned_control(j).
   template <class StopPredicate = NeverStop>
   FullControl update(const FullState& x, StopPredicate&& stop = StopPredicate{}) {
+    return update(x, stop, stop);
+  }
+  // The same with a stop predicate per layer (e.g. a deadline for each within the period).
+  template <class UpperStop, class FastStop>
+  FullControl update(const FullState& x, UpperStop&& upper_stop, FastStop&& fast_stop) {
     // Line 3: upper optimisation from the measured state, warm-started (Eq. 2.34 / 2.30).
     upper_result_ = upper_solver_.solve(upper_problem_, UpperLayer::to_upper(upper_problem_, x),
-                                        config_.upper.max_iterations, stop);
+                                        config_.upper.max_iterations, upper_stop);
 
     // Eq. 2.35: hold each upper input, and state (or interpolate states), for M fine steps.
     const int M = config_.fine_steps_per_upper_step;
@@ -132,7 +137,7 @@ class TwoLayerMpc {
     // Line 5: fast optimisation (Eq. 2.31) from nu = 0 around the held plan.
     fast_solver_.set_zero_controls();
     fast_result_ = fast_solver_.solve(fast_problem_, fast_problem_.deviation(x),
-                                      config_.fast.max_iterations, stop);
+                                      config_.fast.max_iterations, fast_stop);
 
     // Line 4: time shift of the upper plan once an upper step has elapsed (Eq. 2.22).
     const FullControl u = planned_control(0);
