@@ -12,8 +12,6 @@ namespace hmpc::humanoid {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using Fine = RecedingHorizonMpc<HumanoidProblem<kFineHorizon>, kFineHorizon>;
-using Coarse = RecedingHorizonMpc<HumanoidProblem<kCoarseHorizon>, kCoarseHorizon>;
 
 constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
 
@@ -96,7 +94,6 @@ void update(CoarseFast& mpc, const State& x, Clock::time_point start, bool trunc
   DeadlineStop upper(start + period(kUpperShare), truncate), fast(start + period(1.0), truncate);
   mpc.update(to_vector(x), upper, fast);
 }
-
 
 template <class Mpc>
 ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
