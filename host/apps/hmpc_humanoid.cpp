@@ -28,8 +28,8 @@ void usage(std::FILE* out) {
                "                      (default: humanoid-MOTION-KIND)\n"
                "  --no-warm-start     skip the offline optimisation of the initial inputs\n"
                "  --no-truncate       let a solve run past the 30 ms sampling time\n"
-               "exit status: 0 motion completed, %d the robot fell (base below 0.40 m), 2 bad\n"
-               "arguments or motion file, 1 the log or pictures could not be written\n",
+               "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
+               "ground), 2 bad arguments or motion file, 1 the log or pictures could not be written\n",
                kFellStatus);
 }
 
@@ -98,7 +98,10 @@ int main(int argc, char** argv) {
               s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.unusable,
               run.samples.size());
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
-  if (run.fell()) std::printf("the robot FELL at %.2f s (base point below %.2f m)\n", run.fell_at, config.fallen_height);
+  if (run.fell()) {
+    std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n", run.fell_at,
+                config.fallen_clearance);
+  }
 
   const std::string numeral = motion_numeral(stem);
   if (!numeral.empty()) {

@@ -50,6 +50,19 @@ bool stopped_early(const CoarseFast& mpc) {
 
 bool finite(const State& x) { return x.q.allFinite() && x.v.allFinite(); }
 
+// Height above the ground of the lowest part other than the feet: head, torso origin (mid-hip),
+// hip joints, knees (ClosedLoopConfig::fallen_clearance).
+double lowest_non_foot_point(const Dynamics& dynamics, const Model& model, const State& x) {
+  Kinematics kin;
+  dynamics.kinematics(x.q, x.v, kin);
+  double lowest = std::min(kin.position[0].z(), (kin.position[0] + kin.rotation[0] * model.vertex).z());
+  for (int leg = 0; leg < 2; ++leg) {
+    lowest = std::min({lowest, kin.position[Model::body_of(leg, kHipFlexion)].z(),
+                       kin.position[Model::body_of(leg, kKnee)].z()});
+  }
+  return lowest;
+}
+
 // The truncation (ClosedLoopConfig::truncate): called before each iteration of a layer, it
 // stops the solve when the layer's longest iteration so far in this update would no longer
 // end before the deadline, so that a solve ends within its time instead of overrunning it by
@@ -101,7 +114,9 @@ ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& c
   ProblemConfig plant = config.problem;
   plant.contact = contact_for(motion, config.problem.contact);
   const StateCost observer(motion, initial, plant);
-  StepMap simulator(Model(plant.parameters), plant.parameters, plant.contact, kSimulatorStep);
+  const Model model(plant.parameters);
+  const Dynamics body(model);
+  StepMap simulator(model, plant.parameters, plant.contact, kSimulatorStep);
   constexpr int kFineSteps = kFineStepsPerCoarseStep;  // 10 ms input steps per sample
   constexpr int kSimulatorSteps = static_cast<int>(kFastStep / kSimulatorStep + 0.5);
 
@@ -143,7 +158,7 @@ ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& c
       }
     }
     run.samples.push_back(sample);
-    if (!finite(x) || sample.base.position.z() < config.fallen_height) {
+    if (!finite(x) || lowest_non_foot_point(body, model, x) < config.fallen_clearance) {
       run.fell_at = sample.time;
       break;
     }

@@ -37,10 +37,11 @@ struct ClosedLoopConfig {
   // "without optimisation of the initial inputs").
   bool warm_start = true;
   bool truncate = true;  // stop a solve at the sampling time (see above)
-  // The run ends early when the base point is below this height [m] or the state is no
-  // longer finite. Our choice: 0.25 m below the lowest target of Tables 2.2-2.3 (0.65 m,
-  // sitting in motion IV), where no motion has a reason to be.
-  double fallen_height = 0.40;
+  // The run ends early when the robot has fallen: a part other than the feet (head, hips,
+  // knees) within this height of the ground [m], or a state no longer finite. Our choice:
+  // 5 cm, below which kneeling, sitting on the ground or lying is unmistakable, while the
+  // deepest squat keeps the knees and hips some 0.3 m up.
+  double fallen_clearance = 0.05;
   int threads = 2;  // linearisation threads (ThreadPool), 1: serial
   ProblemConfig problem{};
 };

@@ -16,7 +16,7 @@
 //         turned by pi +- 0.3 rad; VII's apex above V's (checked across runs by the caller);
 //   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
 //         full rotations), a flight phase, and an upright landing as for V-VII.
-// Every motion also must not have fallen (closed_loop.hpp's fallen_height).
+// Every motion also must not have fallen (closed_loop.hpp's fallen_clearance).
 #pragma once
 
 #include <string>
