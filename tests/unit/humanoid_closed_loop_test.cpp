@@ -15,6 +15,7 @@
 
 #include "hmpc/humanoid/physical_checks.hpp"
 #include "hmpc/humanoid/viewing.hpp"
+#include "hmpc/platform/linux/heap_monitor.hpp"
 
 namespace {
 
@@ -136,6 +137,30 @@ TEST(HumanoidClosedLoop, CoarseFastCostsLessThanCoarseOnStanding) {
               fine, coarse, coarse / fine, coarse_fast, coarse_fast / fine);
   EXPECT_LT(coarse_fast, coarse);
   EXPECT_LT(coarse_fast, 1.1 * fine);
+}
+
+// The control loop allocates nothing (Standards: host control loops do not allocate): the
+// Coarse-Fast update on its 2-thread pool and the simulator's steps, measured by the heap
+// monitor over 10 samples after construction and the offline warm start.
+TEST(HumanoidClosedLoop, CoarseFastUpdateDoesNotAllocate) {
+  namespace heap_monitor = hmpc::platform::heap_monitor;
+  const Motion m = motion("I-standing");
+  ProblemConfig config;
+  State x = standing_state(config, kStartHeight);
+  ThreadPool pool(2);
+  const auto mpc = make_coarse_fast(m, x, &pool, config);
+  StepMap simulator(Model(config.parameters), config.parameters, config.contact, kSimulatorStep);
+  mpc->initialize(to_vector(x), kOfflineIterations);
+  const auto before = heap_monitor::allocations();
+  heap_monitor::arm();
+  for (int k = 0; k < 10; ++k) {
+    mpc->upper_problem().set_start_time(k * kSamplingPeriod);
+    mpc->update(to_vector(x));
+    for (int j = 0; j < kFineStepsPerCoarseStep; ++j) x = simulator.step(x, mpc->planned_control(j), kFastStep);
+  }
+  heap_monitor::disarm();
+  EXPECT_EQ(heap_monitor::allocations() - before, 0u);
+  EXPECT_NEAR(x.q[2], standing_state(config, kStartHeight).q[2], 0.01);  // it did stand meanwhile
 }
 
 // A run that falls ends early and says when.
