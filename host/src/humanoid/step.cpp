@@ -131,53 +131,47 @@ State StepMap::step_legs(const State& x, const JointVector& tau, double dt) {
 
 // The sub-step lengths' derivatives: zero for a fixed length, -h / rate d rate for the
 // guard's kMaxRotation / rate, and for the remainder minus the derivative of the time
-// elapsed before it.
-State StepMap::linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
-                         StepControlJacobian& fu) {
+// elapsed before it. The rate's derivative reaches the chain through the last Rates rows of
+// the Jacobians (the rates they carry: all of v, or the legs' with the base held).
+template <int Rates, class Jacobian, class ControlJacobian, class Linearised>
+State StepMap::linearise_chain(const State& x, double dt, Jacobian& fx, ControlJacobian& fu,
+                               const Linearised& linearised) {
+  using Row = Eigen::Matrix<double, 1, Jacobian::ColsAtCompileTime>;
   fx.setIdentity();
   fu.setZero();
-  StateRow elapsed_x = StateRow::Zero();
+  Row elapsed_x = Row::Zero();
   ControlRow elapsed_u = ControlRow::Zero();
   return advance(x, dt, [&](State& s, const SubStep& sub) {
-    StateRow dh_x = StateRow::Zero();
+    Row dh_x = Row::Zero();
     ControlRow dh_u = ControlRow::Zero();
     if (sub.rule == SubStep::kGuarded) {
-      const Eigen::Matrix<double, 1, kDofs> drate = -sub.h / guard_rate(s.v) * guard_rate_gradient(s.v);
-      dh_x.noalias() = drate * fx.bottomRows<kDofs>();
-      dh_u.noalias() = drate * fu.bottomRows<kDofs>();
+      const Eigen::Matrix<double, 1, Rates> drate =
+          -sub.h / guard_rate(s.v) * guard_rate_gradient(s.v).template tail<Rates>();
+      dh_x.noalias() = drate * fx.template bottomRows<Rates>();
+      dh_u.noalias() = drate * fu.template bottomRows<Rates>();
     } else if (sub.rule == SubStep::kRemainder) {
       dh_x = -elapsed_x;
       dh_u = -elapsed_u;
     }
-    linearised_substep(s, tau, sub.h, dh_x, dh_u, fx, fu);
+    linearised(s, sub.h, dh_x, dh_u);
     elapsed_x += dh_x;
     elapsed_u += dh_u;
   });
 }
 
+State StepMap::linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
+                         StepControlJacobian& fu) {
+  return linearise_chain<kDofs>(x, dt, fx, fu, [&](State& s, double h, const StateRow& dh_x, const ControlRow& dh_u) {
+    linearised_substep(s, tau, h, dh_x, dh_u, fx, fu);
+  });
+}
+
 State StepMap::linearise_legs(const State& x, const JointVector& tau, double dt,
                               LegStepJacobian& fz, LegControlJacobian& fu) {
-  fz.setIdentity();
-  fu.setZero();
-  LegStateRow elapsed_z = LegStateRow::Zero();
-  ControlRow elapsed_u = ControlRow::Zero();
-  return advance(x, dt, [&](State& s, const SubStep& sub) {
-    LegStateRow dh_z = LegStateRow::Zero();
-    ControlRow dh_u = ControlRow::Zero();
-    if (sub.rule == SubStep::kGuarded) {
-      // The base's rates are held, so only the joints' enter.
-      const Eigen::Matrix<double, 1, kJoints> drate =
-          -sub.h / guard_rate(s.v) * guard_rate_gradient(s.v).tail<kJoints>();
-      dh_z.noalias() = drate * fz.bottomRows<kJoints>();
-      dh_u.noalias() = drate * fu.bottomRows<kJoints>();
-    } else if (sub.rule == SubStep::kRemainder) {
-      dh_z = -elapsed_z;
-      dh_u = -elapsed_u;
-    }
-    linearised_leg_substep(s, tau, sub.h, dh_z, dh_u, fz, fu);
-    elapsed_z += dh_z;
-    elapsed_u += dh_u;
-  });
+  return linearise_chain<kJoints>(x, dt, fz, fu,
+                                  [&](State& s, double h, const LegStateRow& dh_z, const ControlRow& dh_u) {
+                                    linearised_leg_substep(s, tau, h, dh_z, dh_u, fz, fu);
+                                  });
 }
 
 Velocity StepMap::acceleration(const State& x, const JointVector& tau, double h,
@@ -230,11 +224,14 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
     damping_acceleration_.noalias() += J.transpose() * (contact_state_.force_velocity[k] * (J * a));
     contact_terms_[k] = contact_term(J, contact_state_.force[k], contact_state_.force_velocity[k], a, h);
   }
-  // The end stops' d(b - A a)/dh: -(B + 2 h K) a - K qdot per joint.
+  // The end stops' d(b - A a)/dh: -(B + 2 h K) a - K qdot per joint; and their nominal part
+  // of r, which every joint column below differences against.
+  JointVector nominal_stop;
   for (int j = 0; j < kJoints; ++j) {
     const int i = kBaseDofs + j;
     const JointStop stop = joint_stop(x.q[kFirstJoint + j], x.v[i], joint_lower_[j], joint_upper_[j], parameters_);
     damping_acceleration_[i] -= (stop.damping + 2.0 * h * stop.stiffness) * a[i] + stop.stiffness * x.v[i];
+    nominal_stop[j] = stop_term(j, x.q[kFirstJoint + j], x.v[i], a[i], h);
   }
   const Velocity dynamics_term = dynamics_.inverse_dynamics(x.v, a);
 
@@ -256,8 +253,7 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
     }
     if (i >= kBaseDofs) {
       const int joint = i - kBaseDofs;
-      const double q_joint = x.q[kFirstJoint + joint];
-      change[i] += stop_term(joint, q_joint, v[i], a[i], h) - stop_term(joint, q_joint, x.v[i], a[i], h);
+      change[i] += stop_term(joint, x.q[kFirstJoint + joint], v[i], a[i], h) - nominal_stop[joint];
     }
     residual_jacobian_.col(q_count + j) = change / d;
   }
@@ -291,7 +287,7 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
       }
       if (i >= kFirstJoint) {
         const int joint = i - kFirstJoint, row = kBaseDofs + joint;
-        change[row] += stop_term(joint, q[i], x.v[row], a[row], h) - stop_term(joint, x.q[i], x.v[row], a[row], h);
+        change[row] += stop_term(joint, q[i], x.v[row], a[row], h) - nominal_stop[joint];
       }
     }
     residual_jacobian_.col(j) = change / d;

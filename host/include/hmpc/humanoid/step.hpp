@@ -155,6 +155,11 @@ class StepMap {
   // contact_state_, kinematics_ and the dynamics at perturbed states.
   void residual_jacobian(const State& x, const Velocity& a, double h, int first_q, int q_count,
                          int first_v, int v_count);
+  // linearise()'s and linearise_legs()'s chain over the sub-steps: fx = I, fu = 0, then per
+  // sub-step linearised(s, h, dh_x, dh_u) with the length's derivatives (see step.cpp).
+  template <int Rates, class Jacobian, class ControlJacobian, class Linearised>
+  State linearise_chain(const State& x, double dt, Jacobian& fx, ControlJacobian& fu,
+                        const Linearised& linearised);
   // One sub-step of linearise() (linearise_legs()): x moved as by substep(), fx and fu
   // (fz, fu) multiplied by its Jacobians; dh: the sub-step length's derivatives.
   void linearised_substep(State& x, const JointVector& tau, double h, const StateRow& dh_x,
