@@ -27,6 +27,7 @@
 
 #include "hmpc/humanoid/fast_subsystem.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
+#include "humanoid_test_motions.hpp"
 
 namespace {
 
@@ -60,13 +61,7 @@ double worst_column_error(const A& linearised, const B& reference) {
   return worst;
 }
 
-Motion bare_motion() {
-  Motion m;
-  m.duration = 1.0;
-  m.phase_count = 1;
-  m.phases[0].height = 0.85;
-  return m;
-}
+using test::bare_motion;
 
 ProblemConfig reference_config(ProblemConfig config) {
   config.linearisation = Linearisation::kWholeStepDifferences;

@@ -15,20 +15,14 @@
 #include "hmpc/humanoid/problem.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/solver/ilqr.hpp"
+#include "humanoid_test_motions.hpp"
 
 namespace {
 
 using namespace hmpc::humanoid;
 namespace heap_monitor = hmpc::platform::heap_monitor;
 
-// A motion with every weight zero and one phase: standing still, upright, at 0.85 m.
-Motion bare_motion() {
-  Motion m;
-  m.duration = 1.0;
-  m.phase_count = 1;
-  m.phases[0].height = 0.85;
-  return m;
-}
+using test::bare_motion;
 
 State standing() { return standing_state(ProblemConfig{}, 0.85); }
 
