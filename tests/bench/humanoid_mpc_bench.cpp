@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "hmpc/cli/arguments.hpp"
 #include "hmpc/humanoid/physical_checks.hpp"
 
 namespace {
@@ -127,6 +128,12 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
               "runs of equal length only (a fallen run ends early)\n");
 }
 
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: humanoid_mpc_bench [Google Benchmark flags] [--closed-loop] [--motion NAME]\n"
+               "                          [--threads T] [--linearisation chain-rule|reference]\n");
+}
+
 }  // namespace
 
 BENCHMARK(BM_Linearise)
@@ -145,37 +152,26 @@ int main(int argc, char** argv) {
   std::vector<std::string> motions = {"I-standing",     "II-walking",         "III-running",
                                       "IV-sitting",     "V-low-jump",         "VI-half-turn-jump",
                                       "VII-high-jump",  "VIII-double-flip"};
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--closed-loop") {
-      run_closed_loop = true;
-    } else if (arg == "--motion" && i + 1 < argc) {
-      motions = {argv[++i]};
-    } else if (arg == "--linearisation" && i + 1 < argc) {
-      const std::string value = argv[++i];
-      if (value == name_of(Linearisation::kSubStepChainRule)) {
-        linearisation = Linearisation::kSubStepChainRule;
-      } else if (value == name_of(Linearisation::kWholeStepDifferences)) {
-        linearisation = Linearisation::kWholeStepDifferences;
-      } else {
-        std::fprintf(stderr, "--linearisation needs chain-rule or reference, got '%s'\n", value.c_str());
-        return 2;
+  hmpc::cli::OptionParser parser;
+  parser.flag("--closed-loop", run_closed_loop);
+  parser.text("--motion", [&](const std::string& v) {
+    motions = {v};
+    return v.empty() ? std::string("--motion needs a name (e.g. I-standing)") : std::string();
+  });
+  parser.text("--linearisation", [&](const std::string& v) {
+    for (const Linearisation l : {Linearisation::kSubStepChainRule, Linearisation::kWholeStepDifferences}) {
+      if (v == name_of(l)) {
+        linearisation = l;
+        return std::string();
       }
-    } else if (arg == "--threads" && i + 1 < argc) {
-      char* end = nullptr;
-      const long value = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || value < 1 || value > 64) {
-        std::fprintf(stderr, "--threads needs an integer in 1..64, got '%s'\n", argv[i]);
-        return 2;
-      }
-      threads = static_cast<int>(value);
-    } else {
-      std::fprintf(stderr,
-                   "unknown argument '%s' (expected --closed-loop, --motion NAME (e.g. I-standing), "
-                   "--threads T, --linearisation chain-rule|reference)\n",
-                   arg.c_str());
-      return 2;
     }
+    return hmpc::cli::bad_value("--linearisation", "chain-rule or reference", v);
+  });
+  parser.integer("--threads", 1, 64, threads);
+  std::string error;
+  const auto outcome = parser.parse(argc, argv, error);
+  if (outcome != hmpc::cli::ParseOutcome::kRun) {
+    return hmpc::cli::exit_status(outcome, "humanoid_mpc_bench", error, usage);
   }
   Recorder recorder;
   benchmark::RunSpecifiedBenchmarks(&recorder);
