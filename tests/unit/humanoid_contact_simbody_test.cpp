@@ -102,7 +102,9 @@ struct Outcome {
   double ours_peak = 0.0, simbody_peak = 0.0;
 };
 Outcome run(const char* name, const State& pose, const State& start) {
-  const ProblemConfig config;
+  ProblemConfig config;
+  // Like for like: the twin mirrors the rigid bodies only (simbody_humanoid.hpp).
+  config.parameters = hmpc::hil::SimbodyHumanoid::rigid_parameters(config.parameters);
   const Model model(config.parameters);
   StepMap ours(model, config.parameters, config.contact, kDt);
   StepMap probe(model, config.parameters, config.contact, kDt);  // kinematics for the figures

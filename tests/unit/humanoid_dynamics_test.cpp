@@ -57,8 +57,11 @@ double relative_error(const A& ours, const B& reference) {
   return (ours - reference).norm() / reference.norm();
 }
 
+// The rigid bodies only: Simbody has no armature (simbody_humanoid.hpp).
+Model rigid_model() { return Model(hmpc::hil::SimbodyHumanoid::rigid_parameters()); }
+
 TEST(HumanoidDynamics, AgreesWithSimbody) {
-  const Model model;
+  const Model model = rigid_model();
   Dynamics dynamics(model);
   hmpc::hil::SimbodyHumanoid simbody(model);
   std::mt19937 rng(5);
@@ -95,7 +98,7 @@ TEST(HumanoidDynamics, MassMatrixIsSymmetricPositiveDefinite) {
 // 0.5 v^T M v against the sum over links of 0.5 m |v_com|^2 + 0.5 omega^T I_com omega, with link
 // velocities from forward kinematics, and against Simbody's kinetic energy.
 TEST(HumanoidDynamics, KineticEnergyMatchesLinkEnergies) {
-  const Model model;
+  const Model model = rigid_model();
   Dynamics dynamics(model);
   hmpc::hil::SimbodyHumanoid simbody(model);
   Kinematics kinematics;
@@ -115,6 +118,25 @@ TEST(HumanoidDynamics, KineticEnergyMatchesLinkEnergies) {
     simbody.set_state(s.q, s.v);
     EXPECT_NEAR(quadratic, simbody.kinetic_energy(), 1e-12 * links);
   }
+}
+
+// The armature adds a constant to each joint's diagonal entry of M and armature times its
+// acceleration to its torque; the rigid-body entries are unchanged.
+TEST(HumanoidDynamics, ArmatureAddsToTheJointDiagonal) {
+  const Model with(Parameters{}), without = rigid_model();
+  ASSERT_GT(with.armature.minCoeff(), 0.0);
+  Dynamics armed(with), rigid(without);
+  std::mt19937 rng(8);
+  for (int n = 0; n < 10; ++n) {
+    const State s = random_state(with, rng);
+    MassMatrix expected = rigid.mass_matrix(s.q);
+    expected.diagonal().tail<kJoints>() += with.armature;
+    EXPECT_LE((armed.mass_matrix(s.q) - expected).norm(), 1e-14 * expected.norm());
+    Velocity tau = rigid.inverse_dynamics(s.q, s.v, s.tau);
+    tau.tail<kJoints>() += with.armature.cwiseProduct(s.tau.tail<kJoints>());
+    EXPECT_LE((armed.inverse_dynamics(s.q, s.v, s.tau) - tau).norm(), 1e-12 * tau.norm());
+  }
+  EXPECT_THROW(hmpc::hil::SimbodyHumanoid{with}, std::invalid_argument);
 }
 
 // At rest, the bias force on the base is the weight carried by the base: m g upward.

@@ -113,6 +113,7 @@ hmpc-humanoid-motion 1
 [motion]
 duration = 1.0
 chair = none
+gait = none
 [weights]
 w_HAA = 1
 w_HFE = 1
@@ -133,6 +134,7 @@ w_omega_y = 1
 w_omega_z = 1
 w_fast = 1
 w_fast_control = 1
+w_foot = 1
 [phase]
 start = 0
 attitude = 0 0 pi   # yaw half a turn
@@ -177,6 +179,27 @@ TEST(HumanoidMotion, ParsesTheValidFile) {
   EXPECT_TRUE(chair.chair);
   EXPECT_DOUBLE_EQ(chair.seat_height, 0.5);
   EXPECT_DOUBLE_EQ(chair.seat_x_max, -0.1);
+  EXPECT_EQ(m.gait.period, 0.0);
+  EXPECT_DOUBLE_EQ(m.weights.foot, 1.0);
+  const Motion gait = parse(replace(kValid, "gait = none", "gait = 0.6 0.05 0.4"));
+  EXPECT_DOUBLE_EQ(gait.gait.period, 0.6);
+  EXPECT_DOUBLE_EQ(gait.gait.swing_height, 0.05);
+  EXPECT_DOUBLE_EQ(gait.gait.swing_fraction, 0.4);
+}
+
+TEST(HumanoidMotion, GaitSwingsTheFeetInTurn) {
+  const Gait gait{0.6, 0.05, 0.4};  // each foot swings 0.24 s of each 0.6 s stride
+  // Left foot: swings over [0, 0.24) of each period, at its apex half-way.
+  EXPECT_NEAR(gait.foot_height(0.12, 0), 0.05, 1e-12);
+  EXPECT_NEAR(gait.foot_height(0.6 + 0.06, 0), 0.05 * std::sin(M_PI * 0.25), 1e-12);
+  EXPECT_EQ(gait.foot_height(0.25, 0), 0.0);
+  EXPECT_EQ(gait.foot_height(0.42, 0), 0.0);
+  // Right foot: half a period later; both stand in between (double support).
+  EXPECT_EQ(gait.foot_height(0.12, 1), 0.0);
+  EXPECT_NEAR(gait.foot_height(0.42, 1), 0.05, 1e-12);
+  EXPECT_EQ(gait.foot_height(0.27, 1), 0.0);
+  // No gait: both feet down.
+  EXPECT_EQ(Gait{}.foot_height(0.12, 0), 0.0);
 }
 
 struct BadCase {
@@ -187,26 +210,28 @@ struct BadCase {
 
 TEST(HumanoidMotion, RejectsBadFilesNamingFileLineAndKey) {
   const std::vector<BadCase> cases{
-      {"unknown key", replace(kValid, "w_vz = 1", "w_vw = 1"), "test.motion:18: w_vw: unknown key"},
-      {"missing key", replace(kValid, "w_beta = 1\n", ""), "test.motion:6: w_beta: missing key"},
+      {"unknown key", replace(kValid, "w_vz = 1", "w_vw = 1"), "test.motion:19: w_vw: unknown key"},
+      {"missing key", replace(kValid, "w_beta = 1\n", ""), "test.motion:7: w_beta: missing key"},
       {"negative weight", replace(kValid, "w_height = 1", "w_height = -2"),
-       "test.motion:15: w_height: a weight must be >= 0"},
-      {"nan weight", replace(kValid, "w_alpha = 1", "w_alpha = nan"), "test.motion:19: w_alpha: not finite"},
-      {"infinite weight", replace(kValid, "w_q2 = 1", "w_q2 = inf"), "test.motion:12: w_q2: not finite"},
+       "test.motion:16: w_height: a weight must be >= 0"},
+      {"nan weight", replace(kValid, "w_alpha = 1", "w_alpha = nan"), "test.motion:20: w_alpha: not finite"},
+      {"infinite weight", replace(kValid, "w_q2 = 1", "w_q2 = inf"), "test.motion:13: w_q2: not finite"},
       {"phases out of order", replace(kValid, "start = 0.5", "start = 0"),
-       "test.motion:32: start: phases out of order"},
+       "test.motion:34: start: phases out of order"},
       {"first phase late", replace(kValid, "start = 0\n", "start = 0.1\n"),
-       "test.motion:27: start: the first phase must start at 0"},
-      {"duplicate key", replace(kValid, "w_KFE = 1", "w_HFE = 2"), "test.motion:9: w_HFE: duplicate key"},
-      {"garbage number", replace(kValid, "height = 0.85", "height = 0.8x"), "test.motion:29: height: not a number"},
+       "test.motion:29: start: the first phase must start at 0"},
+      {"duplicate key", replace(kValid, "w_KFE = 1", "w_HFE = 2"), "test.motion:10: w_HFE: duplicate key"},
+      {"garbage number", replace(kValid, "height = 0.85", "height = 0.8x"), "test.motion:31: height: not a number"},
       {"wrong count", replace(kValid, "velocity = 1 0 0", "velocity = 1 0"),
-       "test.motion:35: velocity: expected 3 numbers"},
+       "test.motion:37: velocity: expected 3 numbers"},
       {"missing value", replace(kValid, "duration = 1.0", "duration ="), "test.motion:4: duration: missing value"},
       {"zero duration", replace(kValid, "duration = 1.0", "duration = 0"), "test.motion:4: duration: must be > 0"},
       {"bad chair", replace(kValid, "chair = none", "chair = 0.5 0.2 0.1"), "test.motion:5: chair: expected"},
+      {"bad gait", replace(kValid, "gait = none", "gait = 0.6 0.05 1.5"), "test.motion:6: gait: expected"},
+      {"short gait", replace(kValid, "gait = none", "gait = 0.6 0.05"), "test.motion:6: gait: expected 3 numbers"},
       {"bad version", replace(kValid, "hmpc-humanoid-motion 1", "hmpc-humanoid-motion 2"),
        "test.motion:2: expected the version line"},
-      {"unknown section", replace(kValid, "[weights]", "[weight]"), "test.motion:6: unknown section [weight]"},
+      {"unknown section", replace(kValid, "[weights]", "[weight]"), "test.motion:7: unknown section [weight]"},
       {"no phase", kValid.substr(0, kValid.find("[phase]")), "test.motion: missing section [phase]"},
       {"setting outside a section", replace(kValid, "[motion]\n", ""), "test.motion:3: duration: setting outside"},
   };

@@ -125,6 +125,36 @@ TEST(HumanoidProblem, LegAngleTermsFollowTheirEquations) {
   EXPECT_GT(std::abs(r[10]), std::sqrt(5.0) * 0.05);
 }
 
+TEST(HumanoidProblem, FootHeightTermFollowsTheGait) {
+  const ProblemConfig config;
+  const State x0 = standing();
+  Motion m = bare_motion();
+  m.weights.foot = 4.0;
+  const Model model;
+  const double sink =
+      model.total_mass() * -model.gravity.z() / (kSolePoints * config.contact.stiffness);
+  State lifted = x0;
+  lifted.q[7 + kHipFlexion] = 0.6;  // left thigh forward: the left foot off the ground
+  lifted.q[7 + kKnee] = 0.6;
+  // Without a gait both feet are asked to stay down: standing feet are at their standing
+  // height (sunk by the static load), a lifted one is penalised.
+  const StateCost down(m, x0, config);
+  EXPECT_NEAR(down.features(x0).foot_height_left, -sink, 1e-9);
+  EXPECT_NEAR(down.features(x0).foot_height_right, -sink, 1e-9);
+  EXPECT_NEAR(down.residual(to_vector(x0), 0.1)[14], 2.0 * -sink, 1e-9);
+  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[14], 2.0 * down.features(lifted).foot_height_left, 1e-12);
+  // With a gait the lifted foot's target follows the swing.
+  m.gait = Gait{0.6, 0.05, 0.4};
+  const StateCost cost(m, x0, config);
+  // t = 0.12 s: the left foot half-way through its swing, 5 cm up; the right in stance.
+  const CostResidual r = cost.residual(to_vector(x0), 0.12);
+  EXPECT_NEAR(r[14], 2.0 * (-sink - 0.05), 1e-9);
+  EXPECT_NEAR(r[15], 2.0 * -sink, 1e-9);
+  const BaseFeatures f = cost.features(lifted);
+  EXPECT_GT(f.foot_height_left, 0.02);
+  EXPECT_NEAR(cost.residual(to_vector(lifted), 0.12)[14], 2.0 * (f.foot_height_left - 0.05), 1e-12);
+}
+
 TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) {
   const ProblemConfig config;
   const State x0 = standing();
@@ -139,6 +169,17 @@ TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) 
   StateMatrix lxx;
   const double time = 0.5;  // in the jump phase: every term active
   cost.derivatives(x, time, lx, lxx);
+  // The walking motion adds the foot heights (its gait).
+  const StateCost walking(load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/II-walking.motion"), x0, config);
+  ASSERT_GT(walking.motion().gait.period, 0.0);
+  StateVector walking_lx;
+  StateMatrix walking_lxx;
+  walking.derivatives(x, time, walking_lx, walking_lxx);
+  Eigen::Matrix<double, 1, kStateSize> walking_gradient;
+  hmpc::central_difference_jacobian(
+      [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(walking.value(xp, time)); }, x,
+      walking_gradient);
+  EXPECT_LT((walking_lx - walking_gradient.transpose()).norm(), 1e-5 * walking_gradient.norm());
   Eigen::Matrix<double, 1, kStateSize> gradient;
   hmpc::central_difference_jacobian(
       [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(cost.value(xp, time)); }, x,

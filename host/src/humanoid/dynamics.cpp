@@ -115,7 +115,7 @@ const MassMatrix& Dynamics::mass_matrix() {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
     // carried to each ancestor j it gives M_ji = S_j^T F.
     Vector6 F = composite_[i] * subspace_[i];
-    mass_matrix_(dof_of(i), dof_of(i)) = subspace_[i].dot(F);
+    mass_matrix_(dof_of(i), dof_of(i)) = subspace_[i].dot(F) + model_.armature[i - 1];
     int j = i;
     while (model_.bodies[j].parent >= 0) {
       F = transform_[j].transpose() * F;
@@ -160,7 +160,7 @@ Velocity Dynamics::inverse_dynamics(const Velocity& v, const Velocity& a) {
   // Backward pass: tau_i = S_i^T f_i, f_parent += X_i^T f_i.
   Velocity tau;
   for (int i = kBodies - 1; i > 0; --i) {
-    tau[dof_of(i)] = subspace_[i].dot(force_[i]);
+    tau[dof_of(i)] = subspace_[i].dot(force_[i]) + model_.armature[i - 1] * a[dof_of(i)];
     force_[model_.bodies[i].parent] += transform_[i].transpose() * force_[i];
   }
   tau.head<6>() = force_[0];

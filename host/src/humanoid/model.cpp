@@ -125,6 +125,7 @@ Model::Model(const Parameters& p) {
       joint_lower[leg * kJointsPerLeg + j] = p.joint_lower[j];
       joint_upper[leg * kJointsPerLeg + j] = p.joint_upper[j];
       torque_limit[leg * kJointsPerLeg + j] = p.torque_limit[j];
+      armature[leg * kJointsPerLeg + j] = p.armature[j];
     }
   }
 }

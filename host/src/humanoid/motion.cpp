@@ -20,12 +20,12 @@ struct KeySpec {
 // The keys of each section, with the number of values each takes (motion.hpp).
 const std::map<std::string, std::vector<KeySpec>>& section_keys() {
   static const std::map<std::string, std::vector<KeySpec>> keys{
-      {"motion", {{"duration", 1}, {"chair", 3}}},
+      {"motion", {{"duration", 1}, {"chair", 3}, {"gait", 3}}},
       {"weights",
        {{"w_HAA", 1}, {"w_HFE", 1}, {"w_KFE", 1}, {"w_AFE", 1}, {"w_q1", 1}, {"w_q2", 1},
         {"w_q3", 1}, {"w_q4", 1}, {"w_height", 1}, {"w_vx", 1}, {"w_vy", 1}, {"w_vz", 1},
         {"w_alpha", 1}, {"w_beta", 1}, {"w_omega_x", 1}, {"w_omega_y", 1}, {"w_omega_z", 1},
-        {"w_fast", 1}, {"w_fast_control", 1}}},
+        {"w_fast", 1}, {"w_fast_control", 1}, {"w_foot", 1}}},
       {"phase", {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}}},
   };
   return keys;
@@ -177,6 +177,15 @@ const Phase& Motion::phase_at(double t) const {
   return phases[i];
 }
 
+double Gait::foot_height(double t, int foot) const {
+  if (period <= 0.0) return 0.0;
+  const double cycle = t / period - std::floor(t / period);
+  double progress = cycle - 0.5 * foot;
+  if (progress < 0.0) progress += 1.0;
+  progress /= swing_fraction;
+  return progress < 1.0 ? swing_height * std::sin(M_PI * progress) : 0.0;
+}
+
 Motion parse_motion(std::istream& in, const std::string& source) {
   const Reader reader(source);
   const std::vector<Section> sections = reader.sections(in);
@@ -226,6 +235,16 @@ Motion parse_motion(std::istream& in, const std::string& source) {
     }
   }
 
+  if (m.entries.at("gait").text != "none") {
+    const std::vector<double> gait = reader.numbers(m, "gait");
+    motion.gait = Gait{gait[0], gait[1], gait[2]};
+    if (gait[0] <= 0.0 || gait[1] <= 0.0 || gait[2] <= 0.0 || gait[2] > 1.0) {
+      reader.fail(reader.line_of(m, "gait"), "gait",
+                  "expected 'none' or 'period swing_height swing_fraction' with period > 0, "
+                  "swing_height > 0 and 0 < swing_fraction <= 1");
+    }
+  }
+
   const Section& w = *weights_section;
   CostWeights& weights = motion.weights;
   weights.control = {reader.weight(w, "w_HAA"), reader.weight(w, "w_HFE"), reader.weight(w, "w_KFE"),
@@ -243,6 +262,7 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   }
   weights.fast = reader.weight(w, "w_fast");
   weights.fast_control = reader.weight(w, "w_fast_control");
+  weights.foot = reader.weight(w, "w_foot");
   return motion;
 }
 

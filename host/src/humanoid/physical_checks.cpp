@@ -115,7 +115,7 @@ PhysicalCheck locomotion(const Motion& motion, const ClosedLoopRun& run, bool ru
   c.verdict = format("mean forward speed %.2f m/s (required >= %.2f)", speed, 0.8 * target) +
               ", touchdowns " + (order.empty() ? std::string("none") : order) +
               (alternating ? " (alternating)" : " (not alternating)") +
-              format(", %d samples with both feet off the ground", flying);
+              format(", %.0f samples with both feet off the ground", flying);
   return c;
 }
 

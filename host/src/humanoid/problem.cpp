@@ -40,6 +40,8 @@ BaseFeatures StateCost::features(const State& x) const {
   f.alpha_right = leg_angle(right, 0);
   f.beta_left = leg_angle(left, 1);
   f.beta_right = leg_angle(right, 1);
+  f.foot_height_left = kin.position[Model::body_of(0, kAnkle)].z() - dynamics_.model().sole_height;
+  f.foot_height_right = kin.position[Model::body_of(1, kAnkle)].z() - dynamics_.model().sole_height;
   return f;
 }
 
@@ -58,6 +60,10 @@ CostResidual StateCost::residual(const StateVector& x, double time) const {
   r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);                         // Eq. 4.29
   r[10] = std::sqrt(w.beta) * (f.beta_left - beta_left_init_);
   r.segment<3>(11) = w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);   // Eq. 4.30
+  const double foot_height[2] = {f.foot_height_left, f.foot_height_right};
+  for (int foot = 0; foot < 2; ++foot) {  // foot heights (Gait, motion.hpp)
+    r[14 + foot] = std::sqrt(w.foot) * (foot_height[foot] - motion_.gait.foot_height(time, foot));
+  }
   return r;
 }
 

@@ -5,6 +5,11 @@
 // a fictitious base acceleration), and forward dynamics by a fixed-size Cholesky
 // factorisation of M.
 //
+// Each joint's reflected actuator inertia (Model::armature) adds to M's diagonal, and its
+// armature times the joint acceleration to the RNEA's torque: the rotor's own gyroscopic and
+// base-coupling terms are neglected (the usual model, as MuJoCo's armature), the rigid bodies
+// are exact.
+//
 // Sign convention: M(q) a + c(q, v) = tau, i.e. c is Featherstone's bias force C (Coriolis,
 // centrifugal and gravity). The thesis writes Eq. 2.41a as M v_dot = c + u, so its c is -c here.
 // tau's first six entries are a spatial force on the torso in torso coordinates (moment about

@@ -57,6 +57,7 @@ struct Model {
   Vector3 vertex;                        // top of the head, torso coordinates
   double sole_height;                    // sole plane below the ankle joint (foot frame z)
   JointVector joint_lower, joint_upper, torque_limit;
+  JointVector armature;                  // reflected actuator inertia (Parameters::armature)
 
   explicit Model(const Parameters& p = Parameters{});
 

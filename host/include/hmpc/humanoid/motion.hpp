@@ -12,6 +12,8 @@
 //   [motion]   duration  simulated length [s] (> 0)
 //              chair     `none`, or the chair's seat (motion IV): height, then the x range
 //                        from x_min to x_max (world) [m]
+//              gait      `none`, or a stepping schedule (Gait below): period [s], swing
+//                        height [m], swing fraction of the period (0 < fraction <= 1)
 //   [weights]  w_HAA w_HFE w_KFE w_AFE   W_control of Eq. 4.24, per joint of each leg
 //              w_q1 w_q2 w_q3 w_q4       W_attitude of Eq. 4.25 (vector part, scalar part)
 //              w_height                  Eq. 4.26
@@ -19,6 +21,7 @@
 //              w_alpha w_beta            Eqs. 4.28, 4.29
 //              w_omega_x w_omega_y w_omega_z   W_omega of Eq. 4.30
 //              w_fast w_fast_control     lower layer: Eq. 2.52 and its control cost
+//              w_foot                    foot heights (Gait below; not in the thesis)
 //   [phase]    start     phase start time [s]; the first phase starts at 0, later ones
 //                        strictly later than the one before
 //              attitude  roll phi, pitch theta, yaw xi [rad]
@@ -44,6 +47,27 @@ struct CostWeights {
   double alpha = 0.0, beta = 0.0;
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // w_omega_x, _y, _z
   double fast = 0.0, fast_control = 0.0;  // Eq. 2.52 and the deviation nu's weight
+  double foot = 0.0;                       // foot heights (Gait)
+};
+
+// Foot heights (ours: the thesis has no such term). Sec. 2.6's costs alone never lift a foot
+// to step within a 300 ms horizon: leaning into the target velocity is a local optimum, since a
+// loaded foot has no gradient towards unloading; nor do they ask a foot to come back down
+// after a disturbance or a landing, so hopping from foot to foot costs the planner almost
+// nothing (both measured, see the motion files). So, as gait-scheduled MPCs do (e.g. MuJoCo
+// MPC's locomotion tasks), each foot follows a height reference:
+//   l_foot = w_foot (z_foot - z_ref(t))^2,  z_ref = h sin(pi s) in a swing, else 0,
+// z_foot the ankle joint's height above its height standing upright on the unloaded ground.
+// Without a gait both feet are asked to stay down (a weak w_foot still lets a jump leave the
+// ground). With one, s in [0, 1) is the progress through the swing; the left foot swings from
+// the start of each period, the right from its middle. Where a foot lands is left to
+// Eq. 4.28's alpha term, which asks for the base between the feet.
+struct Gait {
+  double period = 0.0;          // [s], a stride: one step of each foot; 0: no gait
+  double swing_height = 0.0;    // h [m]
+  double swing_fraction = 0.0;  // of the period each foot swings; > 0.5: flight phases
+  // z_ref of `foot` (0 left, 1 right) at time t: 0 in its stance (or without a gait).
+  double foot_height(double t, int foot) const;
 };
 
 struct Phase {
@@ -61,6 +85,7 @@ struct Motion {
   double duration = 0.0;
   bool chair = false;
   double seat_height = 0.0, seat_x_min = 0.0, seat_x_max = 0.0;  // [m], when `chair`
+  Gait gait;  // period 0: none
   CostWeights weights;
   std::array<Phase, kMaxPhases> phases{};
   int phase_count = 0;

@@ -4,6 +4,7 @@
 // the cost of Sec. 4.3.1:
 //   l(x, u, t) = l_attitude + l_height + l_velocity + l_alpha + l_beta + l_omega   (4.25-4.30)
 //              + tau' W_control tau                                                 (4.24)
+//              + l_foot                     (ours: foot heights, motion.hpp's Gait)
 // with the targets of the motion phase in force at the step's time (Tables 2.2-2.3), and
 // l_T(x) the same state terms at the end of the horizon.
 //
@@ -88,11 +89,13 @@ struct BaseFeatures {
   Vector3 velocity;            // base point, world
   Vector3 angular_velocity;    // torso, world
   double alpha_left = 0.0, alpha_right = 0.0, beta_left = 0.0, beta_right = 0.0;  // [rad]
+  // Ankle joints' heights above their height standing upright on the unloaded ground [m].
+  double foot_height_left = 0.0, foot_height_right = 0.0;
 };
 
 // Square-root-weighted residuals: 4 attitude, 1 height, 3 velocity, 1 alpha, 2 beta (right,
-// left), 3 angular velocity.
-constexpr int kCostResiduals = 14;
+// left), 3 angular velocity, 2 swing-foot heights (left, right; Gait in motion.hpp).
+constexpr int kCostResiduals = 16;
 using CostResidual = Eigen::Matrix<double, kCostResiduals, 1>;
 
 // The state cost of Sec. 4.3.1 for one motion. Immutable after construction; every function
