@@ -67,6 +67,35 @@ TEST(HumanoidClosedLoop, CoarseFastSitsOnTheChairAndStandsUp) {
   EXPECT_TRUE(check.passed) << check.verdict;
 }
 
+// Motion II (issue 5's check): mean forward speed from 0.5 s on at least 80 % of the 1.2 m/s
+// target, with at least four touchdowns, alternating.
+TEST(HumanoidClosedLoop, CoarseFastWalks) {
+  const Motion m = motion("II-walking");
+  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, m.duration);
+  const PhysicalCheck check = check_motion("II", m, r);
+  std::printf("motion II, Coarse-Fast: %s\n", check.verdict.c_str());
+  EXPECT_TRUE(check.passed) << check.verdict;
+}
+
+// Motion V (issue 5's check): a flight phase with both feet unloaded for at least 60 ms, then
+// the last 0.3 s on its feet, upright, in the standing band.
+TEST(HumanoidClosedLoop, CoarseFastJumpsAndLandsUpright) {
+  const Motion m = motion("V-low-jump");
+  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, m.duration);
+  const PhysicalCheck check = check_motion("V", m, r);
+  std::printf("motion V, Coarse-Fast: %s\n", check.verdict.c_str());
+  EXPECT_TRUE(check.passed) << check.verdict;
+}
+
+// Motion VI (issue 5's check): motion V's checks, and the yaw turned by pi +- 0.3 rad.
+TEST(HumanoidClosedLoop, CoarseFastJumpsWithAHalfTurn) {
+  const Motion m = motion("VI-half-turn-jump");
+  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, m.duration);
+  const PhysicalCheck check = check_motion("VI", m, r);
+  std::printf("motion VI, Coarse-Fast: %s\n", check.verdict.c_str());
+  EXPECT_TRUE(check.passed) << check.verdict;
+}
+
 // Recovery from a push: motion I's targets, but 0.5 m/s asked for in the first 0.3 s, then
 // standing still. The robot must step or lean and come back to rest on both feet: both
 // loaded, base point in the standing band, over the last second. This is what the joints'

@@ -139,20 +139,25 @@ TEST(HumanoidProblem, FootHeightTermFollowsTheGait) {
   // Without a gait both feet are asked to stay down: standing feet are at their standing
   // height (sunk by the static load), a lifted one is penalised.
   const StateCost down(m, x0, config);
-  EXPECT_NEAR(down.features(x0).foot_height_left, -sink, 1e-9);
-  EXPECT_NEAR(down.features(x0).foot_height_right, -sink, 1e-9);
-  EXPECT_NEAR(down.residual(to_vector(x0), 0.1)[14], 2.0 * -sink, 1e-9);
-  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[14], 2.0 * down.features(lifted).foot_height_left, 1e-12);
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(down.features(x0).sole_height[k], -sink, 1e-9);
+    EXPECT_NEAR(down.residual(to_vector(x0), 0.1)[14 + k], 2.0 * -sink, 1e-9);
+  }
+  const BaseFeatures lifted_features = down.features(lifted);
+  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[14], 2.0 * lifted_features.sole_height[0], 1e-12);
+  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[15], 2.0 * lifted_features.sole_height[1], 1e-12);
   // With a gait the lifted foot's target follows the swing.
   m.gait = Gait{0.6, 0.05, 0.4};
   const StateCost cost(m, x0, config);
   // t = 0.12 s: the left foot half-way through its swing, 5 cm up; the right in stance.
   const CostResidual r = cost.residual(to_vector(x0), 0.12);
-  EXPECT_NEAR(r[14], 2.0 * (-sink - 0.05), 1e-9);
-  EXPECT_NEAR(r[15], 2.0 * -sink, 1e-9);
+  EXPECT_NEAR(r[14], 2.0 * (-sink - 0.05), 1e-9);  // left heel
+  EXPECT_NEAR(r[15], 2.0 * (-sink - 0.05), 1e-9);  // left toe
+  EXPECT_NEAR(r[16], 2.0 * -sink, 1e-9);           // right heel
+  EXPECT_NEAR(r[17], 2.0 * -sink, 1e-9);
   const BaseFeatures f = cost.features(lifted);
-  EXPECT_GT(f.foot_height_left, 0.02);
-  EXPECT_NEAR(cost.residual(to_vector(lifted), 0.12)[14], 2.0 * (f.foot_height_left - 0.05), 1e-12);
+  EXPECT_GT(f.sole_height[0], 0.02);
+  EXPECT_NEAR(cost.residual(to_vector(lifted), 0.12)[14], 2.0 * (f.sole_height[0] - 0.05), 1e-12);
 }
 
 TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) {

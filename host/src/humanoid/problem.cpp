@@ -17,6 +17,13 @@ double leg_angle(const Vector3& d, int axis) { return std::atan2(d[axis], -d.z()
 
 StateCost::StateCost(const Motion& motion, const State& initial, const ProblemConfig& config)
     : motion_(motion), base_point_(config.base_point), dynamics_(Model(config.parameters)) {
+  const ContactModel contact(dynamics_.model(), config.parameters, config.contact);
+  for (int leg = 0; leg < 2; ++leg) {
+    // ContactModel's sole corners: per foot two heel corners, then two toe corners.
+    const auto corner = [&](int k) { return contact.point(leg * kFootPoints + k).local; };
+    sole_points_[2 * leg] = 0.5 * (corner(0) + corner(1));
+    sole_points_[2 * leg + 1] = 0.5 * (corner(2) + corner(3));
+  }
   const BaseFeatures f = features(initial);
   beta_left_init_ = f.beta_left;
   beta_right_init_ = f.beta_right;
@@ -40,8 +47,10 @@ BaseFeatures StateCost::features(const State& x) const {
   f.alpha_right = leg_angle(right, 0);
   f.beta_left = leg_angle(left, 1);
   f.beta_right = leg_angle(right, 1);
-  f.foot_height_left = kin.position[Model::body_of(0, kAnkle)].z() - dynamics_.model().sole_height;
-  f.foot_height_right = kin.position[Model::body_of(1, kAnkle)].z() - dynamics_.model().sole_height;
+  for (int k = 0; k < 4; ++k) {
+    const int foot = Model::body_of(k / 2, kAnkle);
+    f.sole_height[k] = (kin.position[foot] + kin.rotation[foot] * sole_points_[k]).z();
+  }
   return f;
 }
 
@@ -60,9 +69,8 @@ CostResidual StateCost::residual(const StateVector& x, double time) const {
   r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);                         // Eq. 4.29
   r[10] = std::sqrt(w.beta) * (f.beta_left - beta_left_init_);
   r.segment<3>(11) = w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);   // Eq. 4.30
-  const double foot_height[2] = {f.foot_height_left, f.foot_height_right};
-  for (int foot = 0; foot < 2; ++foot) {  // foot heights (Gait, motion.hpp)
-    r[14 + foot] = std::sqrt(w.foot) * (foot_height[foot] - motion_.gait.foot_height(time, foot));
+  for (int k = 0; k < 4; ++k) {  // foot heights, heel and toe of each sole (Gait, motion.hpp)
+    r[14 + k] = std::sqrt(w.foot) * (f.sole_height[k] - motion_.gait.foot_height(time, k / 2));
   }
   return r;
 }

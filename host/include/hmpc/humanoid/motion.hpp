@@ -56,8 +56,10 @@ struct CostWeights {
 // after a disturbance or a landing, so hopping from foot to foot costs the planner almost
 // nothing (both measured, see the motion files). So, as gait-scheduled MPCs do (e.g. MuJoCo
 // MPC's locomotion tasks), each foot follows a height reference:
-//   l_foot = w_foot (z_foot - z_ref(t))^2,  z_ref = h sin(pi s) in a swing, else 0,
-// z_foot the ankle joint's height above its height standing upright on the unloaded ground.
+//   l_foot = w_foot sum (z_p - z_ref(t))^2,  z_ref = h sin(pi s) in a swing, else 0,
+// over the foot's heel and toe (the centres of its sole's back and front edges), z_p their
+// heights above the ground: both, so that a swinging sole stays level instead of dragging its
+// toe (measured: with the ankle's height alone the swing foot scuffed the ground).
 // Without a gait both feet are asked to stay down (a weak w_foot still lets a jump leave the
 // ground). With one, s in [0, 1) is the progress through the swing; the left foot swings from
 // the start of each period, the right from its middle. Where a foot lands is left to

@@ -89,13 +89,14 @@ struct BaseFeatures {
   Vector3 velocity;            // base point, world
   Vector3 angular_velocity;    // torso, world
   double alpha_left = 0.0, alpha_right = 0.0, beta_left = 0.0, beta_right = 0.0;  // [rad]
-  // Ankle joints' heights above their height standing upright on the unloaded ground [m].
-  double foot_height_left = 0.0, foot_height_right = 0.0;
+  // Heights above the ground of the soles' heel and toe edge centres [m]: left heel, left
+  // toe, right heel, right toe (for the foot-height term; at the standing sink when standing).
+  std::array<double, 4> sole_height{};
 };
 
 // Square-root-weighted residuals: 4 attitude, 1 height, 3 velocity, 1 alpha, 2 beta (right,
-// left), 3 angular velocity, 2 swing-foot heights (left, right; Gait in motion.hpp).
-constexpr int kCostResiduals = 16;
+// left), 3 angular velocity, 4 foot heights (as BaseFeatures::sole_height; Gait in motion.hpp).
+constexpr int kCostResiduals = 18;
 using CostResidual = Eigen::Matrix<double, kCostResiduals, 1>;
 
 // The state cost of Sec. 4.3.1 for one motion. Immutable after construction; every function
@@ -118,6 +119,7 @@ class StateCost {
  private:
   Motion motion_;
   Vector3 base_point_;
+  std::array<Vector3, 4> sole_points_;  // heel and toe edge centres in foot coordinates, as sole_height
   double beta_left_init_ = 0.0, beta_right_init_ = 0.0;
   Dynamics dynamics_;  // kinematics only (a const member function)
 };
