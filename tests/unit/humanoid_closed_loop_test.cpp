@@ -1,10 +1,7 @@
-// Humanoid motions in closed loop (closed_loop.hpp): the physical checks of the motions that
-// run, the Fine / Coarse / Coarse-Fast comparison, and the trajectory log.
-//
-// Solves are not truncated here (ClosedLoopConfig::truncate = false): a truncated solve
-// depends on the machine's load, and ctest shares 2 cores; with it off a run is the same
-// numbers every time (the thread pool's results are bit-identical to serial ones). Solve times
-// against the 30 ms sampling time are measured by humanoid_mpc_bench --closed-loop.
+// The humanoid in closed loop (closed_loop.hpp): standing (motion I's check), the physical
+// checks themselves on made-up runs, the Fine / Coarse / Coarse-Fast comparison, the trajectory
+// log and allocation. The other motions' checks are in humanoid_motion_checks_test (label
+// long). Solves are not truncated (test::run in humanoid_test_motions.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,22 +13,14 @@
 #include "hmpc/humanoid/physical_checks.hpp"
 #include "hmpc/humanoid/viewing.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
+#include "humanoid_test_motions.hpp"
 
 namespace {
 
 using namespace hmpc::humanoid;
 
-Motion motion(const std::string& name) {
-  return load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion");
-}
-
-ClosedLoopRun run(const Motion& m, MpcKind kind, double duration) {
-  ClosedLoopConfig config;
-  config.mpc = kind;
-  config.duration = duration;
-  config.truncate = false;
-  return run_closed_loop(m, config);
-}
+using test::motion;
+using test::run;
 
 // Motion I (issue 5's check): the base point at 0.85 +- 0.05 m for 5 s. Physics of the
 // bound: 5 cm is what a knee bend of ~6 degrees moves the base of our stance; a robot that
@@ -54,71 +43,6 @@ TEST(HumanoidClosedLoop, CoarseFastStandsFiveSeconds) {
   EXPECT_NEAR(last.left_force + last.right_force, weight, 0.05 * weight);
   const PhysicalCheck check = check_motion("I", motion("I-standing"), r);
   EXPECT_TRUE(check.passed) << check.verdict;
-}
-
-// `name` under Coarse-Fast MPC for its file's duration: its physical check passes. Returns
-// the run.
-ClosedLoopRun expect_check_passes(const std::string& name) {
-  const Motion m = motion(name);
-  ClosedLoopRun r = run(m, MpcKind::kCoarseFast, m.duration);
-  const PhysicalCheck check = check_motion(motion_numeral(name), m, r);
-  std::printf("motion %s, Coarse-Fast: %s\n", name.c_str(), check.verdict.c_str());
-  EXPECT_TRUE(check.passed) << check.verdict;
-  return r;
-}
-
-// Motion IV (issue 5's check): sits down to the chair, the seat carrying at least half the
-// weight with the base point at most 0.72 m (physical_checks.cpp), then stands: the last
-// 0.3 s in the standing band 0.85 +- 0.05 m with the seat unloaded.
-TEST(HumanoidClosedLoop, CoarseFastSitsOnTheChairAndStandsUp) {
-  expect_check_passes("IV-sitting");
-}
-
-// Motion II (issue 5's check): mean forward speed from 0.5 s on at least 80 % of the 1.2 m/s
-// target, with at least four touchdowns, alternating.
-TEST(HumanoidClosedLoop, CoarseFastWalks) {
-  expect_check_passes("II-walking");
-}
-
-// Motion V (issue 5's check): a flight phase with both feet unloaded for at least 60 ms, then
-// the last 0.3 s on its feet, upright, in the standing band.
-TEST(HumanoidClosedLoop, CoarseFastJumpsAndLandsUpright) {
-  expect_check_passes("V-low-jump");
-}
-
-// Motion VII (issue 5's check): motion V's checks, and higher than V (apex of the base point).
-TEST(HumanoidClosedLoop, CoarseFastJumpsHigherThanTheLowJump) {
-  const double high = apex_height(expect_check_passes("VII-high-jump"));
-  const double low = apex_height(run(motion("V-low-jump"), MpcKind::kCoarseFast, motion("V-low-jump").duration));
-  std::printf("apex: VII %.3f m, V %.3f m\n", high, low);
-  EXPECT_GT(high, low);
-}
-
-// Motion VI (issue 5's check): motion V's checks, and the yaw turned by pi +- 0.3 rad.
-TEST(HumanoidClosedLoop, CoarseFastJumpsWithAHalfTurn) {
-  expect_check_passes("VI-half-turn-jump");
-}
-
-// Recovery from a push: motion I's targets, but 0.5 m/s asked for in the first 0.3 s, then
-// standing still. The robot must step or lean and come back to rest on both feet: both
-// loaded, base point in the standing band, over the last second. This is what the joints'
-// armature (parameters.hpp) made the MPC's 5 ms model predict well enough to do; without it
-// the robot hopped from foot to foot to the end.
-TEST(HumanoidClosedLoop, CoarseFastRecoversFromAPushOnBothFeet) {
-  Motion m = motion("I-standing");
-  m.phase_count = 2;
-  m.phases[1] = m.phases[0];
-  m.phases[0].velocity.x() = 0.5;
-  m.phases[1].start = 0.3;
-  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, 3.0);
-  ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
-  const double weight = 47.0 * 9.81;
-  for (const ClosedLoopSample& s : r.samples) {
-    if (s.time < 2.0) continue;
-    EXPECT_NEAR(s.base.position.z(), 0.85, 0.05) << "t = " << s.time;
-    EXPECT_GT(s.left_force, 0.1 * weight) << "t = " << s.time;
-    EXPECT_GT(s.right_force, 0.1 * weight) << "t = " << s.time;
-  }
 }
 
 // The checks themselves, on made-up runs: each passes what it should and fails what it should.

@@ -1,6 +1,9 @@
 // Motions the humanoid unit tests share.
 #pragma once
 
+#include <string>
+
+#include "hmpc/humanoid/closed_loop.hpp"
 #include "hmpc/humanoid/motion.hpp"
 
 namespace hmpc::humanoid::test {
@@ -12,6 +15,25 @@ inline Motion bare_motion() {
   m.phase_count = 1;
   m.phases[0].height = 0.85;
   return m;
+}
+
+#ifdef HMPC_HUMANOID_MOTIONS
+// A shipped motion file by name (host/humanoid/motions/<name>.motion).
+inline Motion motion(const std::string& name) {
+  return load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion");
+}
+#endif
+
+// A closed-loop run without truncation: a truncated solve depends on the machine's load, and
+// ctest shares 2 cores; without it a run is the same numbers every time (the thread pool's
+// results are bit-identical to serial ones). Solve times against the 30 ms sampling time are
+// measured by humanoid_mpc_bench --closed-loop.
+inline ClosedLoopRun run(const Motion& m, MpcKind kind, double duration) {
+  ClosedLoopConfig config;
+  config.mpc = kind;
+  config.duration = duration;
+  config.truncate = false;
+  return run_closed_loop(m, config);
 }
 
 }  // namespace hmpc::humanoid::test
