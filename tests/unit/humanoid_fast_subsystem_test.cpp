@@ -10,6 +10,7 @@
 
 #include "hmpc/humanoid/coarse_fast.hpp"
 #include "hmpc/humanoid/fast_subsystem.hpp"
+#include "humanoid_test_motions.hpp"
 
 namespace {
 
@@ -139,8 +140,7 @@ TEST(HumanoidFastSubsystem, FollowsTheHeldReference) {
 }
 
 TEST(HumanoidFastSubsystem, CoarseFastUpdateGivesAUsablePlanWithinTheLimits) {
-  const Motion motion =
-      load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/I-standing.motion");
+  const Motion motion = test::motion("I-standing");
   const State x0 = standing_state(ProblemConfig{}, motion.phases[0].height);
   ThreadPool pool(2);
   const auto mpc = make_coarse_fast(motion, x0, &pool);

@@ -163,7 +163,7 @@ TEST(HumanoidProblem, FootHeightTermFollowsTheGait) {
 TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) {
   const ProblemConfig config;
   const State x0 = standing();
-  const Motion m = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/V-low-jump.motion");
+  const Motion m = test::motion("V-low-jump");
   const StateCost cost(m, x0, config);
   StateVector x = to_vector(x0);
   Eigen::Matrix<double, kStateSize, 1> perturbation;
@@ -175,7 +175,7 @@ TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) 
   const double time = 0.5;  // in the jump phase: every term active
   cost.derivatives(x, time, lx, lxx);
   // The walking motion adds the foot heights (its gait).
-  const StateCost walking(load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/II-walking.motion"), x0, config);
+  const StateCost walking(test::motion("II-walking"), x0, config);
   ASSERT_GT(walking.motion().gait.period, 0.0);
   StateVector walking_lx;
   StateMatrix walking_lxx;
@@ -226,7 +226,7 @@ struct Solve {
   std::unique_ptr<Problem> problem;
   std::unique_ptr<Solver> solver;
   explicit Solve(ThreadPool* pool) {
-    const Motion m = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/I-standing.motion");
+    const Motion m = test::motion("I-standing");
     problem = std::make_unique<Problem>(m, to_state(x0), ProblemConfig{}, pool);
     solver = std::make_unique<Solver>(hmpc::IlqrConfig<double>::with_cap_and_tolerance(3, 1e-9));
   }
