@@ -55,6 +55,7 @@ double hertz_modulus(double weight, const humanoid::ContactParameters& ours) {
 }
 
 // The model, if the twin can mirror it (no armature, see simbody_humanoid.hpp).
+template <class Model>
 const Model& require_rigid(const Model& model) {
   if (!model.armature.isZero(0.0)) {
     throw std::invalid_argument(
@@ -66,19 +67,22 @@ const Model& require_rigid(const Model& model) {
 
 }  // namespace
 
-struct SimbodyHumanoid::Impl {
+template <int ArmJoints>
+struct BasicSimbodyHumanoid<ArmJoints>::Impl {
+  using D = Dimensions<ArmJoints>;
   SimTK::MultibodySystem system;
   SimTK::SimbodyMatterSubsystem matter{system};
   SimTK::GeneralForceSubsystem forces{system};
   SimTK::Force::Gravity gravity;
   SimTK::Force::DiscreteForces applied{forces, matter};
   SimTK::MobilizedBody::Free torso;
-  std::array<SimTK::MobilizedBody, kBodies> body;  // ours -> Simbody's; none for the hip links
+  std::array<SimTK::MobilizedBody, D::kBodies> body;  // ours -> Simbody's; none for the hip links
   std::vector<SimTK::Force> soles;                 // the contact elements, ContactModel's order
   std::vector<SimTK::MobilizedBodyIndex> sole_body;
   SimTK::State state;
   std::unique_ptr<SimTK::RungeKuttaMersonIntegrator> integrator;  // made by the first step()
   bool restart = true;  // the integrator must start from `state` (set_state() changed it)
+  std::array<SimTK::MobilizedBody, kJoints> joint;  // the mobilizer of each of our joints
   std::array<int, kJoints> joint_q{}, joint_u{};  // Simbody index of each of our joints
   int base_q = 0, base_u = 0;
   MassMatrix to_simbody;                          // T: u = T v
@@ -87,7 +91,6 @@ struct SimbodyHumanoid::Impl {
   Impl(const Model& model, const ContactModel* contact)
       : gravity(forces, matter, vec3(require_rigid(model).gravity)),
         torso(matter.Ground(), SimTK::Transform(), rigid_body(model.bodies[0]), SimTK::Transform()) {
-    std::array<SimTK::MobilizedBody, 2 * kJointsPerLeg> leg;
     for (int side = 0; side < 2; ++side) {
       const Body& hip = model.bodies[Model::body_of(side, kHipAbduction)];
       const Body& thigh = model.bodies[Model::body_of(side, kHipFlexion)];
@@ -108,28 +111,37 @@ struct SimbodyHumanoid::Impl {
       SimTK::MobilizedBody::Pin foot_body(
           shank_body, SimTK::Transform(ankle_frame, vec3(foot.joint_origin)), rigid_body(foot),
           SimTK::Transform(ankle_frame, SimTK::Vec3(0)));
-      leg[side * kJointsPerLeg + 0] = thigh_body;
-      leg[side * kJointsPerLeg + 2] = shank_body;
-      leg[side * kJointsPerLeg + 3] = foot_body;
+      joint[side * kJointsPerLeg + kHipAbduction] = thigh_body;
+      joint[side * kJointsPerLeg + kKnee] = shank_body;
+      joint[side * kJointsPerLeg + kAnkle] = foot_body;
       body[Model::body_of(side, kHipFlexion)] = thigh_body;
       body[Model::body_of(side, kKnee)] = shank_body;
       body[Model::body_of(side, kAnkle)] = foot_body;
     }
+    if constexpr (ArmJoints == 1) {
+      const Body& arm = model.bodies[D::kArmBody];
+      const SimTK::Rotation shoulder_frame(SimTK::UnitVec3(vec3(arm.axis)), SimTK::ZAxis);
+      SimTK::MobilizedBody::Pin arm_body(
+          torso, SimTK::Transform(shoulder_frame, vec3(arm.joint_origin)), rigid_body(arm),
+          SimTK::Transform(shoulder_frame, SimTK::Vec3(0)));
+      joint[D::kArmJoint] = arm_body;
+      body[D::kArmBody] = arm_body;
+    }
     body[0] = torso;
     if (contact != nullptr) add_ground_contact(model, *contact);
     state = system.realizeTopology();
-    if (state.getNQ() != kConfigurationSize || state.getNU() != kDofs) {
+    if (state.getNQ() != D::kConfigurationSize || state.getNU() != kDofs) {
       throw std::logic_error("SimbodyHumanoid: unexpected number of coordinates");
     }
     base_q = torso.getFirstQIndex(state);
     base_u = torso.getFirstUIndex(state);
+    for (int j = 0; j < kJoints; ++j) {
+      if (joint[j].isEmptyHandle()) continue;
+      joint_q[j] = joint[j].getFirstQIndex(state);
+      joint_u[j] = joint[j].getFirstUIndex(state);
+    }
+    // The Universal's second coordinate is hip flexion.
     for (int side = 0; side < 2; ++side) {
-      for (int j : {kHipAbduction, kKnee, kAnkle}) {
-        const int ours = side * kJointsPerLeg + j;
-        joint_q[ours] = leg[ours].getFirstQIndex(state);
-        joint_u[ours] = leg[ours].getFirstUIndex(state);
-      }
-      // The Universal's second coordinate is hip flexion.
       const int abduction = side * kJointsPerLeg + kHipAbduction;
       joint_q[abduction + 1] = joint_q[abduction] + 1;
       joint_u[abduction + 1] = joint_u[abduction] + 1;
@@ -173,10 +185,10 @@ struct SimbodyHumanoid::Impl {
     const Matrix3 R = Eigen::Quaterniond(sq[base_q], sq[base_q + 1], sq[base_q + 2], sq[base_q + 3])
                           .normalized()
                           .toRotationMatrix();
-    to_simbody.block<3, 3>(base_u, 0) = R;
-    to_simbody.block<3, 3>(base_u + 3, 3) = R;
+    to_simbody.template block<3, 3>(base_u, 0) = R;
+    to_simbody.template block<3, 3>(base_u + 3, 3) = R;
     const Velocity v = to_simbody.transpose() * map(state.getU());
-    udot_offset.segment<3>(base_u + 3) = R * v.head<3>().cross(v.segment<3>(3));
+    udot_offset.template segment<3>(base_u + 3) = R * v.template head<3>().cross(v.template segment<3>(3));
   }
 
   Eigen::Map<const Eigen::Matrix<double, kDofs, 1>> map(const SimTK::Vector& x) const {
@@ -184,18 +196,24 @@ struct SimbodyHumanoid::Impl {
   }
 };
 
-Parameters SimbodyHumanoid::rigid_parameters(Parameters parameters) {
+template <int A>
+Parameters BasicSimbodyHumanoid<A>::rigid_parameters(Parameters parameters) {
   parameters.armature.fill(0.0);
+  parameters.arm_armature = 0.0;
   return parameters;
 }
 
-SimbodyHumanoid::SimbodyHumanoid(const Model& model)
+template <int A>
+BasicSimbodyHumanoid<A>::BasicSimbodyHumanoid(const Model& model)
     : impl_(std::make_unique<Impl>(model, nullptr)) {}
-SimbodyHumanoid::SimbodyHumanoid(const Model& model, const ContactModel& contact)
+template <int A>
+BasicSimbodyHumanoid<A>::BasicSimbodyHumanoid(const Model& model, const ContactModel& contact)
     : impl_(std::make_unique<Impl>(model, &contact)) {}
-SimbodyHumanoid::~SimbodyHumanoid() = default;
+template <int A>
+BasicSimbodyHumanoid<A>::~BasicSimbodyHumanoid() = default;
 
-void SimbodyHumanoid::set_state(const Configuration& q, const Velocity& v) {
+template <int A>
+void BasicSimbodyHumanoid<A>::set_state(const Configuration& q, const Velocity& v) {
   Impl& s = *impl_;
   const Eigen::Quaterniond orientation =
       Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized();
@@ -208,30 +226,32 @@ void SimbodyHumanoid::set_state(const Configuration& q, const Velocity& v) {
   for (int k = 0; k < 3; ++k) sq[s.base_q + 4 + k] = q[k];
   for (int j = 0; j < kJoints; ++j) sq[s.joint_q[j]] = q[7 + j];
 
-  s.to_simbody.block<3, 3>(s.base_u, 0) = R;
-  s.to_simbody.block<3, 3>(s.base_u + 3, 3) = R;
+  s.to_simbody.template block<3, 3>(s.base_u, 0) = R;
+  s.to_simbody.template block<3, 3>(s.base_u + 3, 3) = R;
   const Eigen::Matrix<double, kDofs, 1> u = s.to_simbody * v;
   SimTK::Vector& su = s.state.updU();
   for (int k = 0; k < kDofs; ++k) su[k] = u[k];
-  s.udot_offset.segment<3>(s.base_u + 3) = R * v.head<3>().cross(v.segment<3>(3));
+  s.udot_offset.template segment<3>(s.base_u + 3) = R * v.template head<3>().cross(v.template segment<3>(3));
   s.restart = true;
 }
 
-humanoid::State SimbodyHumanoid::state() {
+template <int A>
+BasicState<A> BasicSimbodyHumanoid<A>::state() {
   Impl& s = *impl_;
   const SimTK::Vector& sq = s.state.getQ();
-  humanoid::State x;
+  State x;
   const Eigen::Quaterniond orientation =
       Eigen::Quaterniond(sq[s.base_q], sq[s.base_q + 1], sq[s.base_q + 2], sq[s.base_q + 3])
           .normalized();
   for (int k = 0; k < 3; ++k) x.q[k] = sq[s.base_q + 4 + k];
-  x.q.segment<4>(3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
+  x.q.template segment<4>(3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
   for (int j = 0; j < kJoints; ++j) x.q[7 + j] = sq[s.joint_q[j]];
   x.v = s.to_simbody.transpose() * s.map(s.state.getU());
   return x;
 }
 
-MassMatrix SimbodyHumanoid::mass_matrix() {
+template <int A>
+BasicMassMatrix<A> BasicSimbodyHumanoid<A>::mass_matrix() {
   Impl& s = *impl_;
   s.system.realize(s.state, SimTK::Stage::Position);
   SimTK::Matrix M;
@@ -243,7 +263,8 @@ MassMatrix SimbodyHumanoid::mass_matrix() {
   return s.to_simbody.transpose() * M_s * s.to_simbody;
 }
 
-Velocity SimbodyHumanoid::bias_forces() {
+template <int A>
+BasicVelocity<A> BasicSimbodyHumanoid<A>::bias_forces() {
   Impl& s = *impl_;
   s.system.realize(s.state, SimTK::Stage::Velocity);
   const SimTK::Vector zero(kDofs, 0.0);
@@ -257,7 +278,8 @@ Velocity SimbodyHumanoid::bias_forces() {
   return s.to_simbody.transpose() * (s.map(residual) + s.map(M_d));
 }
 
-Velocity SimbodyHumanoid::forward_dynamics(const Velocity& tau) {
+template <int A>
+BasicVelocity<A> BasicSimbodyHumanoid<A>::forward_dynamics(const Velocity& tau) {
   Impl& s = *impl_;
   const Eigen::Matrix<double, kDofs, 1> tau_s = s.to_simbody * tau;
   SimTK::Vector mobility_forces(kDofs);
@@ -267,13 +289,15 @@ Velocity SimbodyHumanoid::forward_dynamics(const Velocity& tau) {
   return s.to_simbody.transpose() * (s.map(s.state.getUDot()) - s.udot_offset);
 }
 
-double SimbodyHumanoid::kinetic_energy() {
+template <int A>
+double BasicSimbodyHumanoid<A>::kinetic_energy() {
   Impl& s = *impl_;
   s.system.realize(s.state, SimTK::Stage::Velocity);
   return s.matter.calcKineticEnergy(s.state);
 }
 
-void SimbodyHumanoid::step(const JointVector& tau, double dt) {
+template <int A>
+void BasicSimbodyHumanoid<A>::step(const JointVector& tau, double dt) {
   Impl& s = *impl_;
   SimTK::Vector mobility_forces(kDofs, 0.0);
   for (int j = 0; j < kJoints; ++j) mobility_forces[s.joint_u[j]] = tau[j];
@@ -299,7 +323,8 @@ void SimbodyHumanoid::step(const JointVector& tau, double dt) {
   s.update_mapping();
 }
 
-std::array<Vector3, kSolePoints> SimbodyHumanoid::sole_forces() {
+template <int A>
+std::array<Vector3, kSolePoints> BasicSimbodyHumanoid<A>::sole_forces() {
   Impl& s = *impl_;
   std::array<Vector3, kSolePoints> out;
   for (Vector3& f : out) f.setZero();
@@ -316,8 +341,12 @@ std::array<Vector3, kSolePoints> SimbodyHumanoid::sole_forces() {
   return out;
 }
 
-int SimbodyHumanoid::integrator_steps() const {
+template <int A>
+int BasicSimbodyHumanoid<A>::integrator_steps() const {
   return impl_->integrator ? impl_->integrator->getNumStepsTaken() : 0;
 }
+
+template class BasicSimbodyHumanoid<0>;
+template class BasicSimbodyHumanoid<1>;
 
 }  // namespace hmpc::hil

@@ -10,7 +10,8 @@
 //    halves), and Simbody's udot = d/dt(R v_base) = R (a_base + (0, omega x v_o)).
 //  - Hip: MobilizedBody::Universal (first about the abduction axis, then about the rotated
 //    flexion axis) replaces our massless hip link and its two revolute joints.
-//  - Knee and ankle: MobilizedBody::Pin with its z axis along our joint axis.
+//  - Knee and ankle, and the reaching variant's shoulder: MobilizedBody::Pin with its z axis
+//    along our joint axis.
 //  - Joint coordinates are the same angles; Simbody orders q and u by tree level, so the
 //    index of each is looked up once.
 // With T the orthogonal matrix u = T v: M = T^T M_S T, c = T^T (c_S + M_S d), tau_S = T tau,
@@ -49,36 +50,46 @@
 
 namespace hmpc::hil {
 
-class SimbodyHumanoid {
+// The twin of BasicModel<ArmJoints> (model.hpp): the biped or the reaching robot.
+template <int ArmJoints>
+class BasicSimbodyHumanoid {
  public:
+  using Model = humanoid::BasicModel<ArmJoints>;
+  using ContactModel = humanoid::BasicContactModel<ArmJoints>;
+  using Configuration = humanoid::BasicConfiguration<ArmJoints>;
+  using Velocity = humanoid::BasicVelocity<ArmJoints>;
+  using JointVector = humanoid::BasicJointVector<ArmJoints>;
+  using MassMatrix = humanoid::BasicMassMatrix<ArmJoints>;
+  using State = humanoid::BasicState<ArmJoints>;
+
   // `parameters` without armature: what the twin can mirror.
   static humanoid::Parameters rigid_parameters(humanoid::Parameters parameters = humanoid::Parameters{});
 
   // Throws std::invalid_argument if the model has armature.
-  explicit SimbodyHumanoid(const humanoid::Model& model = humanoid::Model(rigid_parameters()));
+  explicit BasicSimbodyHumanoid(const Model& model = Model(rigid_parameters()));
   // With ground contact at `contact`'s sole points, its parameters mapped as above.
-  SimbodyHumanoid(const humanoid::Model& model, const humanoid::ContactModel& contact);
-  ~SimbodyHumanoid();
-  SimbodyHumanoid(const SimbodyHumanoid&) = delete;
-  SimbodyHumanoid& operator=(const SimbodyHumanoid&) = delete;
+  BasicSimbodyHumanoid(const Model& model, const ContactModel& contact);
+  ~BasicSimbodyHumanoid();
+  BasicSimbodyHumanoid(const BasicSimbodyHumanoid&) = delete;
+  BasicSimbodyHumanoid& operator=(const BasicSimbodyHumanoid&) = delete;
 
   // Our q and v (model.hpp); the quaternion is normalised.
-  void set_state(const humanoid::Configuration& q, const humanoid::Velocity& v);
+  void set_state(const Configuration& q, const Velocity& v);
 
   // Our q and v at the current state.
-  humanoid::State state();
+  State state();
 
   // In our coordinates, from Simbody's calcM, calcResidualForceIgnoringConstraints (zero udot,
   // gravity applied) and realize(Acceleration) with tau as applied mobility forces (and the
   // contact forces, if any).
-  humanoid::MassMatrix mass_matrix();
-  humanoid::Velocity bias_forces();
-  humanoid::Velocity forward_dynamics(const humanoid::Velocity& tau);
+  MassMatrix mass_matrix();
+  Velocity bias_forces();
+  Velocity forward_dynamics(const Velocity& tau);
   double kinetic_energy();
 
   // Advances the state by dt under gravity, the contact and the joint torques tau held over
   // dt (zero-order hold, as StepMap::step), with Simbody's error-controlled Runge-Kutta-Merson.
-  void step(const humanoid::JointVector& tau, double dt);
+  void step(const JointVector& tau, double dt);
   // Ground force on each sole point at the current state (world), indexed as ContactModel's
   // points (0-3 left foot, 4-7 right); zero without contact.
   std::array<humanoid::Vector3, humanoid::kSolePoints> sole_forces();
@@ -86,8 +97,13 @@ class SimbodyHumanoid {
   int integrator_steps() const;
 
  private:
+  static constexpr int kJoints = humanoid::Dimensions<ArmJoints>::kJoints;
+  static constexpr int kDofs = humanoid::Dimensions<ArmJoints>::kDofs;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+using SimbodyHumanoid = BasicSimbodyHumanoid<0>;
+using SimbodyArmHumanoid = BasicSimbodyHumanoid<1>;
 
 }  // namespace hmpc::hil

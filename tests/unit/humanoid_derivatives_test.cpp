@@ -251,13 +251,13 @@ TEST(HumanoidDerivatives, LinearisedStepIsTheStep) {
   std::mt19937 rng(3);
   StepJacobian fx;
   StepControlJacobian fu;
-  LegStepJacobian fz;
-  LegControlJacobian fl;
+  JointStepJacobian fz;
+  JointControlJacobian fl;
   for (int trial = 0; trial < 3; ++trial) {
     const State x = random_state(rng, 0.0);
     const JointVector tau = random_torques(rng);
     EXPECT_EQ(to_vector(map.linearise(x, tau, 0.03, fx, fu)), to_vector(map.step(x, tau, 0.03)));
-    EXPECT_EQ(to_vector(map.linearise_legs(x, tau, 0.01, fz, fl)), to_vector(map.step_legs(x, tau, 0.01)));
+    EXPECT_EQ(to_vector(map.linearise_joints(x, tau, 0.01, fz, fl)), to_vector(map.step_joints(x, tau, 0.01)));
   }
 }
 
@@ -267,16 +267,57 @@ TEST(HumanoidDerivatives, LinearisationDoesNotAllocate) {
   const JointVector tau = JointVector::Constant(1.0);
   StepJacobian fx;
   StepControlJacobian fu;
-  LegStepJacobian fz;
-  LegControlJacobian fl;
+  JointStepJacobian fz;
+  JointControlJacobian fl;
   map.linearise(x, tau, 0.03, fx, fu);  // warm-up
   const auto before = heap_monitor::allocations();
   heap_monitor::arm();
   map.linearise(x, tau, 0.03, fx, fu);
-  map.linearise_legs(x, tau, 0.01, fz, fl);
+  map.linearise_joints(x, tau, 0.01, fz, fl);
   heap_monitor::disarm();
   EXPECT_EQ(heap_monitor::allocations() - before, 0u);
   EXPECT_TRUE(fx.allFinite());
+}
+
+// The reaching robot (n = 31, model.hpp): the same linearisation with the arm's joint, its
+// Jacobians against the refined reference at random states around the stance (the arm
+// swinging, half of them lifted off the ground), the next state step()'s, and no allocation.
+TEST(HumanoidDerivatives, ArmVariantMatchesTheRefinedReference) {
+  const ProblemConfig config;
+  ArmStepMap map(ArmModel(config.parameters), config.parameters, config.contact, config.max_substep);
+  using ArmState = ArmStepMap::State;
+  using ArmVector = ArmStepMap::StateVector;
+  using ArmTorques = ArmStepMap::JointVector;
+  const auto vector_of = [](const ArmState& x) { return (ArmVector() << x.q, x.v).finished(); };
+  const auto state_of = [](const ArmVector& x) {
+    return ArmState{x.head<Dimensions<1>::kConfigurationSize>(), x.tail<Dimensions<1>::kDofs>()};
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int trial = 0; trial < 4; ++trial) {
+    const State biped = random_state(rng, trial % 2 == 0 ? 0.0 : 0.05);
+    ArmState x;
+    x.q << biped.q, 0.5 + 0.3 * unit(rng);
+    x.v << biped.v, 2.0 * unit(rng);
+    ArmTorques tau;
+    tau << random_torques(rng), 10.0 * unit(rng);
+    ArmStepMap::StepJacobian fx, fx_reference;
+    ArmStepMap::StepControlJacobian fu, fu_reference;
+    const auto before = heap_monitor::allocations();
+    heap_monitor::arm();
+    const ArmState next = map.linearise(x, tau, config.step, fx, fu);
+    heap_monitor::disarm();
+    EXPECT_EQ(heap_monitor::allocations() - before, 0u);
+    EXPECT_EQ(vector_of(next), vector_of(map.step(x, tau, config.step)));
+    refined_difference([&](const ArmVector& xp) { return vector_of(map.step(state_of(xp), tau, config.step)); },
+                       vector_of(x), fx_reference);
+    refined_difference([&](const ArmTorques& up) { return vector_of(map.step(x, up, config.step)); }, tau,
+                       fu_reference);
+    const double fx_error = worst_column_error(fx, fx_reference), fu_error = worst_column_error(fu, fu_reference);
+    std::printf("arm variant, random state %d: worst column error fx %.1e, fu %.1e\n", trial, fx_error, fu_error);
+    EXPECT_LT(fx_error, kRefinedTolerance) << "trial " << trial;
+    EXPECT_LT(fu_error, kRefinedTolerance) << "trial " << trial;
+  }
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // Our humanoid dynamics (CRBA, RNEA, Cholesky forward dynamics) against the same model built in
 // Simbody, for random states: mass matrix, bias forces and contact-free accelerations agree to
-// 1e-9 relative. Also: M is symmetric positive definite, 0.5 v^T M v equals the links' summed
+// 1e-9 relative, for the biped (n = 29) and the reaching robot with its arm (n = 31). Also: M is symmetric positive definite, 0.5 v^T M v equals the links' summed
 // kinetic energy, the model weighs 47.0 kg and stands 1.59 m tall (thesis Sec. 2.5.1), and no
 // dynamics call allocates.
 #include <gtest/gtest.h>
@@ -8,8 +8,10 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <random>
+#include <type_traits>
 
 #include "hmpc/humanoid/dynamics.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
@@ -23,23 +25,27 @@ namespace heap_monitor = hmpc::platform::heap_monitor;
 constexpr int kRandomStates = 50;
 constexpr double kAgreement = 1e-9;  // relative, the requirement
 
-struct State {
-  Configuration q;
-  Velocity v;
-  Velocity tau;
+template <int A>
+struct RandomState {
+  BasicConfiguration<A> q;
+  BasicVelocity<A> v;
+  BasicVelocity<A> tau;
 };
+using State = RandomState<0>;
 
 // Joint angles uniform within the ranges of motion, base anywhere near standing with a uniformly
 // random orientation (normalised Gaussian quaternion), velocities of a fast motion, torques
 // within the limits and a random wrench on the base (exercising the base rows of M^-1).
-State random_state(const Model& model, std::mt19937& rng) {
+template <int A>
+RandomState<A> random_state(const BasicModel<A>& model, std::mt19937& rng) {
+  constexpr int kJoints = Dimensions<A>::kJoints;
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::normal_distribution<double> gauss;
-  State s;
-  s.q.head<3>() << unit(rng), unit(rng), 0.9 + 0.3 * unit(rng);
+  RandomState<A> s;
+  s.q.template head<3>() << unit(rng), unit(rng), 0.9 + 0.3 * unit(rng);
   const Eigen::Quaterniond orientation =
       Eigen::Quaterniond(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized();
-  s.q.segment<4>(3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
+  s.q.template segment<4>(3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
   for (int j = 0; j < kJoints; ++j) {
     const double t = 0.5 * (unit(rng) + 1.0);
     s.q[7 + j] = model.joint_lower[j] + t * (model.joint_upper[j] - model.joint_lower[j]);
@@ -58,29 +64,98 @@ double relative_error(const A& ours, const B& reference) {
 }
 
 // The rigid bodies only: Simbody has no armature (simbody_humanoid.hpp).
-Model rigid_model() { return Model(hmpc::hil::SimbodyHumanoid::rigid_parameters()); }
+template <int A = 0>
+BasicModel<A> rigid_model() {
+  return BasicModel<A>(hmpc::hil::BasicSimbodyHumanoid<A>::rigid_parameters());
+}
 
-TEST(HumanoidDynamics, AgreesWithSimbody) {
-  const Model model = rigid_model();
-  Dynamics dynamics(model);
-  hmpc::hil::SimbodyHumanoid simbody(model);
+// Both variants: the biped (n = 29) and the reaching robot with its arm (n = 31).
+template <class Arm>
+class HumanoidVariants : public ::testing::Test {};
+using Variants = ::testing::Types<std::integral_constant<int, 0>, std::integral_constant<int, 1>>;
+TYPED_TEST_SUITE(HumanoidVariants, Variants);
+
+TYPED_TEST(HumanoidVariants, AgreesWithSimbody) {
+  constexpr int A = TypeParam::value;
+  const BasicModel<A> model = rigid_model<A>();
+  BasicDynamics<A> dynamics(model);
+  hmpc::hil::BasicSimbodyHumanoid<A> simbody(model);
   std::mt19937 rng(5);
   double worst_mass = 0.0, worst_bias = 0.0, worst_acceleration = 0.0;
   for (int n = 0; n < kRandomStates; ++n) {
-    const State s = random_state(model, rng);
+    const RandomState<A> s = random_state(model, rng);
     simbody.set_state(s.q, s.v);
-    const MassMatrix M = dynamics.mass_matrix(s.q);
+    const BasicMassMatrix<A> M = dynamics.mass_matrix(s.q);
     worst_mass = std::max(worst_mass, relative_error(M, simbody.mass_matrix()));
     worst_bias = std::max(worst_bias, relative_error(dynamics.bias_forces(s.q, s.v), simbody.bias_forces()));
     worst_acceleration = std::max(
         worst_acceleration,
         relative_error(dynamics.forward_dynamics(s.q, s.v, s.tau), simbody.forward_dynamics(s.tau)));
   }
-  std::printf("max relative error vs Simbody over %d states: M %.2e, c %.2e, a %.2e\n",
-              kRandomStates, worst_mass, worst_bias, worst_acceleration);
+  std::printf("n = %d: max relative error vs Simbody over %d states: M %.2e, c %.2e, a %.2e\n",
+              Dimensions<A>::kStateSize, kRandomStates, worst_mass, worst_bias, worst_acceleration);
   EXPECT_LT(worst_mass, kAgreement);
   EXPECT_LT(worst_bias, kAgreement);
   EXPECT_LT(worst_acceleration, kAgreement);
+}
+
+// 0.5 v^T M v against the sum over links of 0.5 m |v_com|^2 + 0.5 omega^T I_com omega, with link
+// velocities from forward kinematics, and against Simbody's kinetic energy.
+TYPED_TEST(HumanoidVariants, KineticEnergyMatchesLinkEnergies) {
+  constexpr int A = TypeParam::value;
+  const BasicModel<A> model = rigid_model<A>();
+  BasicDynamics<A> dynamics(model);
+  hmpc::hil::BasicSimbodyHumanoid<A> simbody(model);
+  BasicKinematics<A> kinematics;
+  std::mt19937 rng(7);
+  for (int n = 0; n < kRandomStates; ++n) {
+    const RandomState<A> s = random_state(model, rng);
+    dynamics.kinematics(s.q, s.v, kinematics);
+    double links = 0.0;
+    for (int i = 0; i < Dimensions<A>::kBodies; ++i) {
+      const Body& b = model.bodies[i];
+      const Vector3 omega = kinematics.velocity[i].template head<3>();
+      const Vector3 v_com = kinematics.velocity[i].template tail<3>() + omega.cross(b.com);
+      links += 0.5 * b.mass * v_com.squaredNorm() + 0.5 * omega.dot(b.inertia * omega);
+    }
+    const double quadratic = 0.5 * s.v.dot(dynamics.mass_matrix(s.q) * s.v);
+    EXPECT_NEAR(quadratic, links, 1e-12 * links);
+    simbody.set_state(s.q, s.v);
+    EXPECT_NEAR(quadratic, simbody.kinetic_energy(), 1e-12 * links);
+  }
+}
+
+// The arm is the biped's right arm made its own body: at zero angles the robots are the same
+// mass distribution, so the whole-body (base) block of M agrees; the hand's centre lies the
+// arm's length, upper arm + forearm + the hand's centre of mass (de Leva), below the shoulder.
+TEST(HumanoidArmModel, IsTheBipedsRightArmOnItsOwnJoint) {
+  const Model biped;
+  const ArmModel robot;
+  EXPECT_NEAR(robot.total_mass(), 47.0, 1e-12);
+  BasicConfiguration<1> q = BasicConfiguration<1>::Zero();
+  q[3] = 1.0;
+  ArmDynamics arm_dynamics(robot);
+  Dynamics dynamics(biped);
+  const Eigen::Matrix<double, 6, 6> whole_body = dynamics.mass_matrix(q.head<kConfigurationSize>()).topLeftCorner<6, 6>();
+  EXPECT_LE((arm_dynamics.mass_matrix(q).topLeftCorner<6, 6>() - whole_body).norm(), 1e-12 * whole_body.norm());
+
+  const Parameters p;
+  const double scale = p.stature / p.reference_stature;
+  const double arm_to_hand = scale * (p.upper_arm.reference_length + p.forearm.reference_length +
+                                      p.hand.com_from_proximal * p.hand.reference_length);
+  BasicKinematics<1> kinematics;
+  arm_dynamics.kinematics(q, BasicVelocity<1>::Zero(), kinematics);
+  const int arm = Dimensions<1>::kArmBody;
+  const Vector3 shoulder = kinematics.position[arm];
+  const Vector3 hand = shoulder + kinematics.rotation[arm] * robot.hand;
+  EXPECT_NEAR((shoulder - hand).norm(), arm_to_hand, 1e-12);
+  EXPECT_NEAR(hand.z(), shoulder.z() - arm_to_hand, 1e-12);
+  // Flexion raises the arm forward: at pi / 2 the hand points along +x.
+  q[7 + Dimensions<1>::kArmJoint] = 0.5 * M_PI;
+  arm_dynamics.kinematics(q, BasicVelocity<1>::Zero(), kinematics);
+  const Vector3 raised = kinematics.position[arm] + kinematics.rotation[arm] * robot.hand;
+  EXPECT_NEAR(raised.x() - shoulder.x(), arm_to_hand, 1e-12);
+  EXPECT_NEAR(raised.z(), shoulder.z(), 1e-12);
 }
 
 TEST(HumanoidDynamics, MassMatrixIsSymmetricPositiveDefinite) {
@@ -92,31 +167,6 @@ TEST(HumanoidDynamics, MassMatrixIsSymmetricPositiveDefinite) {
     EXPECT_LE((M - M.transpose()).norm(), 1e-14 * M.norm());
     const Eigen::SelfAdjointEigenSolver<MassMatrix> eigen(M);
     EXPECT_GT(eigen.eigenvalues().minCoeff(), 0.0);
-  }
-}
-
-// 0.5 v^T M v against the sum over links of 0.5 m |v_com|^2 + 0.5 omega^T I_com omega, with link
-// velocities from forward kinematics, and against Simbody's kinetic energy.
-TEST(HumanoidDynamics, KineticEnergyMatchesLinkEnergies) {
-  const Model model = rigid_model();
-  Dynamics dynamics(model);
-  hmpc::hil::SimbodyHumanoid simbody(model);
-  Kinematics kinematics;
-  std::mt19937 rng(7);
-  for (int n = 0; n < kRandomStates; ++n) {
-    const State s = random_state(model, rng);
-    dynamics.kinematics(s.q, s.v, kinematics);
-    double links = 0.0;
-    for (int i = 0; i < kBodies; ++i) {
-      const Body& b = model.bodies[i];
-      const Vector3 omega = kinematics.velocity[i].head<3>();
-      const Vector3 v_com = kinematics.velocity[i].tail<3>() + omega.cross(b.com);
-      links += 0.5 * b.mass * v_com.squaredNorm() + 0.5 * omega.dot(b.inertia * omega);
-    }
-    const double quadratic = 0.5 * s.v.dot(dynamics.mass_matrix(s.q) * s.v);
-    EXPECT_NEAR(quadratic, links, 1e-12 * links);
-    simbody.set_state(s.q, s.v);
-    EXPECT_NEAR(quadratic, simbody.kinetic_energy(), 1e-12 * links);
   }
 }
 

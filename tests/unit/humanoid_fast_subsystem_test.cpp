@@ -41,7 +41,7 @@ TEST(HumanoidFastSubsystem, EpsilonIsSmall) {
 }
 
 TEST(HumanoidFastSubsystem, LegRowsAreTheFullModelsWithTheBaseHeld) {
-  // Eq. 2.50b: M22 zeta_v' = p_z. Over one tiny sub-step the leg acceleration of step_legs must
+  // Eq. 2.50b: M22 zeta_v' = p_z. Over one tiny sub-step the leg acceleration of step_joints must
   // satisfy the full model's inverse dynamics (RNEA, independent of the CRBA the step uses)
   // with the base acceleration zero: leg rows of M [0; a_leg] + c = tau + tau_stop (the end
   // stops).
@@ -50,7 +50,7 @@ TEST(HumanoidFastSubsystem, LegRowsAreTheFullModelsWithTheBaseHeld) {
   x.q[7 + kKnee] = -0.02;  // the left knee past full extension: its end stop engaged
   const JointVector tau = some_torques();
   const double h = 1e-6;
-  const State next = map.step_legs(x, tau, h);
+  const State next = map.step_joints(x, tau, h);
   EXPECT_EQ(next.q.head<7>(), x.q.head<7>());  // the base is held (Eq. 2.28)
   EXPECT_EQ(next.v.head<6>(), x.v.head<6>());
   Velocity a = Velocity::Zero();
@@ -88,7 +88,7 @@ TEST(HumanoidFastSubsystem, ReducesToTheFullModelToFirstOrderInEpsilon) {
     StepMap map(model, parameters);
     const double epsilon = perturbation_parameter(map.dynamics().mass_matrix(x.q));
     const State full = map.step(x, tau, dt);
-    const State fast = map.step_legs(x, tau, dt);
+    const State fast = map.step_joints(x, tau, dt);
     const double error = (to_vector(full) - to_vector(fast)).tail<kJoints>().norm() /
                          (to_vector(full) - to_vector(x)).tail<kJoints>().norm();
     std::printf("torso x%g: epsilon %.2e, relative leg-velocity error over %g s %.2e\n", scale,
@@ -119,7 +119,7 @@ TEST(HumanoidFastSubsystem, FollowsTheHeldReference) {
   const JointVector u_hat = some_torques();
   for (int j = 0; j <= kSteps; ++j) {
     fast.set_reference(j, to_vector(x), u_hat);
-    x = map.step_legs(x, u_hat, config.step);
+    x = map.step_joints(x, u_hat, config.step);
   }
   using Zeta = FastSubsystem<kSteps>::State;
   using Nu = FastSubsystem<kSteps>::Control;

@@ -25,21 +25,25 @@ Matrix3 skew(const Vector3& x) {
 
 }  // namespace
 
-PointJacobian point_jacobian(const Model& model, const Kinematics& kinematics, int body,
-                             const Vector3& local) {
+template <int A>
+BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model, const BasicKinematics<A>& kinematics,
+                                     int body, const Vector3& local) {
+  using PointJacobian = BasicPointJacobian<A>;
   // Base columns from p_dot = R (v_o + omega x (p - p_0)_torso); joint columns
   // (R_b axis_b) x (p - p_b) for every joint b between the torso and the body.
   const Vector3 p = kinematics.position[body] + kinematics.rotation[body] * local;
   PointJacobian J = PointJacobian::Zero();
-  J.leftCols<3>() = -skew(p - kinematics.position[0]) * kinematics.rotation[0];
-  J.middleCols<3>(3) = kinematics.rotation[0];
+  J.template leftCols<3>() = -skew(p - kinematics.position[0]) * kinematics.rotation[0];
+  J.template middleCols<3>(3) = kinematics.rotation[0];
   for (int b = body; b > 0; b = model.bodies[b].parent) {
     J.col(kBaseDofs + b - 1) = (kinematics.rotation[b] * model.bodies[b].axis).cross(p - kinematics.position[b]);
   }
   return J;
 }
 
-ContactModel::ContactModel(const Model& model, const Parameters& p, const ContactParameters& contact)
+template <int A>
+BasicContactModel<A>::BasicContactModel(const Model& model, const Parameters& p,
+                                        const ContactParameters& contact)
     : model_(model), contact_(contact) {
   // Sole rectangle in foot coordinates (origin at the ankle joint, x forward): heel and toe
   // tip from the foot length, sole plane sole_height below the ankle.
@@ -72,12 +76,14 @@ ContactModel::ContactModel(const Model& model, const Parameters& p, const Contac
   }
 }
 
-double ContactModel::seat_window(double x) const {
+template <int A>
+double BasicContactModel<A>::seat_window(double x) const {
   const double w = contact_.seat_edge;
   return logistic((x - contact_.seat_x_min) / w) * logistic((contact_.seat_x_max - x) / w);
 }
 
-Vector3 ContactModel::point_force(double gap, const Vector3& velocity, double scale,
+template <int A>
+Vector3 BasicContactModel<A>::point_force(double gap, const Vector3& velocity, double scale,
                                   Matrix3* dforce) const {
   const ContactParameters& c = contact_;
   const double s = c.smoothing, eps = c.clamp_smoothing;
@@ -102,12 +108,15 @@ Vector3 ContactModel::point_force(double gap, const Vector3& velocity, double sc
   return force;
 }
 
-void ContactModel::evaluate(const Kinematics& kinematics, const Velocity& v, ContactState& out) const {
+template <int A>
+void BasicContactModel<A>::evaluate(const Kinematics& kinematics, const Velocity& v,
+                                    ContactState& out) const {
   out.count = contact_.chair ? kContactPoints : kSolePoints;
   for (int i = 0; i < out.count; ++i) evaluate_point(i, kinematics, v, out);
 }
 
-void ContactModel::evaluate_point(int i, const Kinematics& kinematics, const Velocity& v,
+template <int A>
+void BasicContactModel<A>::evaluate_point(int i, const Kinematics& kinematics, const Velocity& v,
                                   ContactState& out) const {
   const ContactPoint& point = points_[i];
   const Vector3 p = kinematics.position[point.body] + kinematics.rotation[point.body] * point.local;
@@ -117,7 +126,8 @@ void ContactModel::evaluate_point(int i, const Kinematics& kinematics, const Vel
   out.force[i] = force_at(i, p, out.velocity[i], out.force_velocity[i]);
 }
 
-Vector3 ContactModel::force_at(int i, const Vector3& position, const Vector3& velocity,
+template <int A>
+Vector3 BasicContactModel<A>::force_at(int i, const Vector3& position, const Vector3& velocity,
                                Matrix3& dforce) const {
   const bool seat = i >= kSolePoints;
   const double gap = seat ? position.z() - contact_.seat_height : position.z();
@@ -125,23 +135,35 @@ Vector3 ContactModel::force_at(int i, const Vector3& position, const Vector3& ve
   return point_force(gap, velocity, scale, &dforce);
 }
 
-bool ContactModel::moves_with(int i, int body) const {
+template <int A>
+bool BasicContactModel<A>::moves_with(int i, int body) const {
   // A parent is numbered below its children (model.hpp).
   int b = points_[i].body;
   while (b > body) b = model_.bodies[b].parent;
   return b == body;
 }
 
-Velocity ContactModel::generalized_force(const ContactState& state) {
+template <int A>
+BasicVelocity<A> BasicContactModel<A>::generalized_force(const ContactState& state) {
   Velocity tau = Velocity::Zero();
   for (int i = 0; i < state.count; ++i) tau.noalias() += state.jacobian[i].transpose() * state.force[i];
   return tau;
 }
 
-VerticalLoad vertical_load(const ContactState& state) {
+template <int A>
+VerticalLoad vertical_load(const BasicContactState<A>& state) {
   VerticalLoad load;
   for (int i = 0; i < state.count; ++i) (i < kSolePoints ? load.sole : load.seat) += state.force[i].z();
   return load;
 }
+
+template class BasicContactModel<0>;
+template class BasicContactModel<1>;
+template BasicPointJacobian<0> point_jacobian(const BasicModel<0>&, const BasicKinematics<0>&, int,
+                                              const Vector3&);
+template BasicPointJacobian<1> point_jacobian(const BasicModel<1>&, const BasicKinematics<1>&, int,
+                                              const Vector3&);
+template VerticalLoad vertical_load(const BasicContactState<0>&);
+template VerticalLoad vertical_load(const BasicContactState<1>&);
 
 }  // namespace hmpc::humanoid

@@ -52,28 +52,32 @@ constexpr int dof_of(int body) { return kBaseDofs + body - 1; }
 
 // The forward pass of kinematics() given each body's rotation relative to its parent (to the
 // world for the torso).
-void kinematics_from_rotations(const Model& model, const std::array<Matrix3, kBodies>& rotation,
-                               const Vector3& base_position, const Velocity& v, Kinematics& out) {
+template <int A>
+void kinematics_from_rotations(const BasicModel<A>& model,
+                               const std::array<Matrix3, Dimensions<A>::kBodies>& rotation,
+                               const Vector3& base_position, const BasicVelocity<A>& v,
+                               BasicKinematics<A>& out) {
   out.rotation[0] = rotation[0];
   out.position[0] = base_position;
-  out.velocity[0] = v.head<6>();
-  for (int i = 1; i < kBodies; ++i) {
+  out.velocity[0] = v.template head<6>();
+  for (int i = 1; i < Dimensions<A>::kBodies; ++i) {
     const Body& b = model.bodies[i];
     const Matrix3& joint_rotation = rotation[i];
     out.rotation[i] = out.rotation[b.parent] * joint_rotation;
     out.position[i] = out.position[b.parent] + out.rotation[b.parent] * b.joint_origin;
     // Body velocity: the parent's velocity moved to the joint, rotated into the body frame,
     // plus the joint rate about the axis.
-    const Vector3 omega = out.velocity[b.parent].head<3>();
-    const Vector3 v_joint = out.velocity[b.parent].tail<3>() + omega.cross(b.joint_origin);
-    out.velocity[i].head<3>() = joint_rotation.transpose() * omega + b.axis * v[dof_of(i)];
-    out.velocity[i].tail<3>() = joint_rotation.transpose() * v_joint;
+    const Vector3 omega = out.velocity[b.parent].template head<3>();
+    const Vector3 v_joint = out.velocity[b.parent].template tail<3>() + omega.cross(b.joint_origin);
+    out.velocity[i].template head<3>() = joint_rotation.transpose() * omega + b.axis * v[dof_of(i)];
+    out.velocity[i].template tail<3>() = joint_rotation.transpose() * v_joint;
   }
 }
 
 }  // namespace
 
-Dynamics::Dynamics(const Model& model) : model_(model) {
+template <int A>
+BasicDynamics<A>::BasicDynamics(const Model& model) : model_(model) {
   for (int i = 0; i < kBodies; ++i) {
     const Body& b = model_.bodies[i];
     inertia_[i] = spatial_inertia(b.mass, b.com, b.inertia);
@@ -84,12 +88,13 @@ Dynamics::Dynamics(const Model& model) : model_(model) {
   mass_matrix_.setZero();
 }
 
-void Dynamics::set_configuration(const Configuration& q) {
+template <int A>
+void BasicDynamics<A>::set_configuration(const Configuration& q) {
   configuration_ = q;
   // Floating base: q = (p, quaternion w x y z); the world-to-torso transform has E = R^T.
   const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
   transform_[0] = motion_transform(orientation.normalized().toRotationMatrix().transpose(),
-                                   q.head<3>());
+                                   q.template head<3>());
   for (int i = 1; i < kBodies; ++i) {
     const Body& b = model_.bodies[i];
     // X = X_J(q) X_T: translate to the joint, then rotate about its axis.
@@ -98,19 +103,21 @@ void Dynamics::set_configuration(const Configuration& q) {
   }
 }
 
-const MassMatrix& Dynamics::mass_matrix(const Configuration& q) {
+template <int A>
+const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix(const Configuration& q) {
   set_configuration(q);
   return mass_matrix();
 }
 
-const MassMatrix& Dynamics::mass_matrix() {
+template <int A>
+const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
   // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X.
   for (int i = 0; i < kBodies; ++i) composite_[i] = inertia_[i];
   for (int i = kBodies - 1; i > 0; --i) {
     composite_[model_.bodies[i].parent] += transform_[i].transpose() * composite_[i] * transform_[i];
   }
   // Base block: S_0 = identity, so M_00 = I^c_0.
-  mass_matrix_.topLeftCorner<6, 6>() = composite_[0];
+  mass_matrix_.template topLeftCorner<6, 6>() = composite_[0];
   for (int i = kBodies - 1; i > 0; --i) {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
     // carried to each ancestor j it gives M_ji = S_j^T F.
@@ -121,8 +128,8 @@ const MassMatrix& Dynamics::mass_matrix() {
       F = transform_[j].transpose() * F;
       j = model_.bodies[j].parent;
       if (j == 0) {
-        mass_matrix_.block<6, 1>(0, dof_of(i)) = F;
-        mass_matrix_.block<1, 6>(dof_of(i), 0) = F.transpose();
+        mass_matrix_.template block<6, 1>(0, dof_of(i)) = F;
+        mass_matrix_.template block<1, 6>(dof_of(i), 0) = F.transpose();
       } else {
         const double m = subspace_[j].dot(F);
         mass_matrix_(dof_of(j), dof_of(i)) = m;
@@ -133,20 +140,23 @@ const MassMatrix& Dynamics::mass_matrix() {
   return mass_matrix_;
 }
 
-Velocity Dynamics::inverse_dynamics(const Configuration& q, const Velocity& v, const Velocity& a) {
+template <int A>
+BasicVelocity<A> BasicDynamics<A>::inverse_dynamics(const Configuration& q, const Velocity& v,
+                                                    const Velocity& a) {
   set_configuration(q);
   return inverse_dynamics(v, a);
 }
 
-Velocity Dynamics::inverse_dynamics(const Velocity& v, const Velocity& a) {
+template <int A>
+BasicVelocity<A> BasicDynamics<A>::inverse_dynamics(const Velocity& v, const Velocity& a) {
   // Gravity as a fictitious upward acceleration of the world: a_world = -(0, g).
   Vector6 world_acceleration;
   world_acceleration << Vector3::Zero(), -model_.gravity;
   // Forward pass (Table 5.1): v_i = X_i v_parent + S_i qd_i,
   // a_i = X_i a_parent + S_i qdd_i + v_i x S_i qd_i; f_i = I_i a_i + v_i x* I_i v_i.
   // The base joint has S = 1: v_0 and a_0 are v and a's first six entries.
-  velocity_[0] = v.head<6>();
-  acceleration_[0] = transform_[0] * world_acceleration + a.head<6>();
+  velocity_[0] = v.template head<6>();
+  acceleration_[0] = transform_[0] * world_acceleration + a.template head<6>();
   for (int i = 1; i < kBodies; ++i) {
     const int parent = model_.bodies[i].parent;
     const Vector6 joint_velocity = subspace_[i] * v[dof_of(i)];
@@ -163,33 +173,41 @@ Velocity Dynamics::inverse_dynamics(const Velocity& v, const Velocity& a) {
     tau[dof_of(i)] = subspace_[i].dot(force_[i]) + model_.armature[i - 1] * a[dof_of(i)];
     force_[model_.bodies[i].parent] += transform_[i].transpose() * force_[i];
   }
-  tau.head<6>() = force_[0];
+  tau.template head<6>() = force_[0];
   return tau;
 }
 
-Velocity Dynamics::bias_forces(const Configuration& q, const Velocity& v) {
+template <int A>
+BasicVelocity<A> BasicDynamics<A>::bias_forces(const Configuration& q, const Velocity& v) {
   return inverse_dynamics(q, v, Velocity::Zero());
 }
 
-Velocity Dynamics::forward_dynamics(const Configuration& q, const Velocity& v, const Velocity& tau) {
+template <int A>
+BasicVelocity<A> BasicDynamics<A>::forward_dynamics(const Configuration& q, const Velocity& v,
+                                                    const Velocity& tau) {
   const Velocity c = bias_forces(q, v);
   cholesky_.compute(mass_matrix(q));
   return cholesky_.solve(tau - c);
 }
 
-void Dynamics::kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const {
+template <int A>
+void BasicDynamics<A>::kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const {
   std::array<Matrix3, kBodies> rotation;
   rotation[0] = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
   for (int i = 1; i < kBodies; ++i)
     rotation[i] = Eigen::AngleAxisd(q[7 + i - 1], model_.bodies[i].axis).toRotationMatrix();
-  kinematics_from_rotations(model_, rotation, q.head<3>(), v, out);
+  kinematics_from_rotations(model_, rotation, q.template head<3>(), v, out);
 }
 
-void Dynamics::kinematics(const Velocity& v, Kinematics& out) const {
+template <int A>
+void BasicDynamics<A>::kinematics(const Velocity& v, Kinematics& out) const {
   // The transforms hold E = the transposed rotations (set_configuration()).
   std::array<Matrix3, kBodies> rotation;
-  for (int i = 0; i < kBodies; ++i) rotation[i] = transform_[i].topLeftCorner<3, 3>().transpose();
-  kinematics_from_rotations(model_, rotation, configuration_.head<3>(), v, out);
+  for (int i = 0; i < kBodies; ++i) rotation[i] = transform_[i].template topLeftCorner<3, 3>().transpose();
+  kinematics_from_rotations(model_, rotation, configuration_.template head<3>(), v, out);
 }
+
+template class BasicDynamics<0>;
+template class BasicDynamics<1>;
 
 }  // namespace hmpc::humanoid

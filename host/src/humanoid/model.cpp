@@ -42,7 +42,9 @@ MassPoint lump(const std::array<MassPoint, N>& parts) {
 
 }  // namespace
 
-Model::Model(const Parameters& p) {
+template <int ArmJoints>
+BasicModel<ArmJoints>::BasicModel(const Parameters& p) {
+  using D = Dimensions<ArmJoints>;
   const double scale = p.stature / p.reference_stature;
   const double fraction_sum =
       p.head.mass_fraction + p.trunk.mass_fraction +
@@ -65,17 +67,20 @@ Model::Model(const Parameters& p) {
   };
 
   // Torso: trunk (proximal end cervicale, on top), head (proximal end vertex), arms hanging
-  // from the shoulder joint centres.
+  // from the shoulder joint centres; the reaching variant's right arm is its own body.
   const double shoulder_z = p.shoulder_height * p.stature - mid_hip_height;
   const double shoulder_y = 0.5 * p.shoulder_width * p.stature;
-  const MassPoint trunk_part = vertical(p.trunk, trunk, 0.0);
-  const MassPoint head_part = vertical(p.head, trunk + head, 0.0);
-  std::array<MassPoint, 8> torso_parts{trunk_part, head_part};
-  for (int side = 0; side < 2; ++side) {
-    const double y = side == 0 ? shoulder_y : -shoulder_y;
-    torso_parts[2 + 3 * side] = vertical(p.upper_arm, shoulder_z, y);
-    torso_parts[3 + 3 * side] = vertical(p.forearm, shoulder_z - upper_arm, y);
-    torso_parts[4 + 3 * side] = vertical(p.hand, shoulder_z - upper_arm - forearm, y);
+  const auto arm_parts = [&](double y) {
+    return std::array<MassPoint, 3>{vertical(p.upper_arm, shoulder_z, y),
+                                    vertical(p.forearm, shoulder_z - upper_arm, y),
+                                    vertical(p.hand, shoulder_z - upper_arm - forearm, y)};
+  };
+  const std::array<MassPoint, 3> left_arm = arm_parts(shoulder_y), right_arm = arm_parts(-shoulder_y);
+  std::array<MassPoint, 8 - 3 * ArmJoints> torso_parts{vertical(p.trunk, trunk, 0.0),
+                                                       vertical(p.head, trunk + head, 0.0)};
+  for (int k = 0; k < 3; ++k) torso_parts[2 + k] = left_arm[k];
+  if constexpr (ArmJoints == 0) {
+    for (int k = 0; k < 3; ++k) torso_parts[5 + k] = right_arm[k];
   }
   const MassPoint torso = lump(torso_parts);
   bodies[0].mass = torso.mass;
@@ -117,6 +122,21 @@ Model::Model(const Parameters& p) {
     foot_body.inertia = segment_inertia(p.foot, foot_body.mass, foot, 2, 1, 0);
   }
 
+  if constexpr (ArmJoints == 1) {
+    // Arm coordinates: origin at the shoulder joint centre, hanging along -z at zero angle.
+    Body& arm = bodies[D::kArmBody];
+    arm.parent = 0;
+    arm.axis = -Vector3::UnitY();  // flexion raises the arm forward
+    arm.joint_origin = Vector3(0.0, -shoulder_y, shoulder_z);
+    std::array<MassPoint, 3> parts = right_arm;
+    for (MassPoint& part : parts) part.com -= arm.joint_origin;
+    const MassPoint lumped = lump(parts);
+    arm.mass = lumped.mass;
+    arm.com = lumped.com;
+    arm.inertia = lumped.inertia;
+    hand = parts[2].com;  // the hand segment's centre of mass: the palm
+  }
+
   gravity = Vector3(0.0, 0.0, -p.gravity);
   vertex = Vector3(0.0, 0.0, trunk + head);
   sole_height = ankle_height;
@@ -128,12 +148,22 @@ Model::Model(const Parameters& p) {
       armature[leg * kJointsPerLeg + j] = p.armature[j];
     }
   }
+  if constexpr (ArmJoints == 1) {
+    joint_lower[D::kArmJoint] = p.arm_lower;
+    joint_upper[D::kArmJoint] = p.arm_upper;
+    torque_limit[D::kArmJoint] = p.arm_torque_limit;
+    armature[D::kArmJoint] = p.arm_armature;
+  }
 }
 
-double Model::total_mass() const {
+template <int ArmJoints>
+double BasicModel<ArmJoints>::total_mass() const {
   double m = 0.0;
   for (const auto& b : bodies) m += b.mass;
   return m;
 }
+
+template struct BasicModel<0>;
+template struct BasicModel<1>;
 
 }  // namespace hmpc::humanoid

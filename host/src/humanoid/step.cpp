@@ -9,15 +9,17 @@
 namespace hmpc::humanoid {
 namespace {
 
-constexpr int kFirstJoint = kConfigurationSize - kJoints;  // q index of the first joint angle
+constexpr int kFirstJoint = 7;  // q index of the first joint angle
 
 // (S2): q moved over h by the new velocity v.
+template <class Configuration, class Velocity>
 void move_configuration(Configuration& q, const Velocity& v, double h) {
+  constexpr int kJoints = Velocity::RowsAtCompileTime - kBaseDofs;
   const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
-  q.head<3>() += h * (orientation.normalized().toRotationMatrix() * v.segment<3>(3));
+  q.template head<3>() += h * (orientation.normalized().toRotationMatrix() * v.template segment<3>(3));
   // exp of the rotation vector theta = h omega: (cos(|theta|/2), sin(|theta|/2) theta/|theta|);
   // sin(a)/a by its Taylor series near 0, where the quotient loses all digits.
-  const Vector3 theta = h * v.head<3>();
+  const Vector3 theta = h * v.template head<3>();
   const double half_angle = 0.5 * theta.norm();
   const double sinc = half_angle < 1e-4 ? 1.0 - half_angle * half_angle / 6.0
                                         : std::sin(half_angle) / half_angle;
@@ -28,22 +30,26 @@ void move_configuration(Configuration& q, const Velocity& v, double h) {
   q[4] = rotated.x();
   q[5] = rotated.y();
   q[6] = rotated.z();
-  q.tail<kJoints>() += h * v.tail<kJoints>();
+  q.template tail<kJoints>() += h * v.template tail<kJoints>();
 }
 
 // The rotation guard's rate: the torso's |omega| or the fastest joint's.
+template <class Velocity>
 double guard_rate(const Velocity& v) {
-  return std::max(v.head<3>().norm(), v.tail<kJoints>().cwiseAbs().maxCoeff());
+  constexpr int kJoints = Velocity::RowsAtCompileTime - kBaseDofs;
+  return std::max(v.template head<3>().norm(), v.template tail<kJoints>().cwiseAbs().maxCoeff());
 }
 
 // d guard_rate / dv (where one rate is the largest).
-Eigen::Matrix<double, 1, kDofs> guard_rate_gradient(const Velocity& v) {
+template <class Velocity>
+Eigen::Matrix<double, 1, Velocity::RowsAtCompileTime> guard_rate_gradient(const Velocity& v) {
+  constexpr int kDofs = Velocity::RowsAtCompileTime, kJoints = kDofs - kBaseDofs;
   Eigen::Matrix<double, 1, kDofs> gradient = Eigen::Matrix<double, 1, kDofs>::Zero();
   int joint = 0;
-  const double joint_rate = v.tail<kJoints>().cwiseAbs().maxCoeff(&joint);
-  const double omega = v.head<3>().norm();
+  const double joint_rate = v.template tail<kJoints>().cwiseAbs().maxCoeff(&joint);
+  const double omega = v.template head<3>().norm();
   if (omega >= joint_rate) {
-    gradient.head<3>() = v.head<3>().transpose() / omega;
+    gradient.template head<3>() = v.template head<3>().transpose() / omega;
   } else {
     gradient[kBaseDofs + joint] = v[kBaseDofs + joint] > 0.0 ? 1.0 : -1.0;
   }
@@ -55,6 +61,7 @@ int moved_body_of_configuration(int i) { return i < kFirstJoint ? 0 : i - kFirst
 int moved_body_of_velocity(int i) { return i < kBaseDofs ? 0 : i - kBaseDofs + 1; }
 
 // One point's term J^T (f + h D J a) of (L2)'s sum.
+template <class PointJacobian, class Velocity>
 Velocity contact_term(const PointJacobian& J, const Vector3& force, const Matrix3& dforce,
                       const Velocity& a, double h) {
   return J.transpose() * (force + h * dforce * (J * a));
@@ -80,25 +87,29 @@ JointStop joint_stop(double q, double v, double lower, double upper, const Param
   return stop;
 }
 
-StepMap::StepMap(const Model& model, const Parameters& parameters, const ContactParameters& contact,
-                 double max_substep)
+template <int A>
+BasicStepMap<A>::BasicStepMap(const Model& model, const Parameters& parameters,
+                              const ContactParameters& contact, double max_substep)
     : dynamics_(model), contact_(model, parameters, contact), parameters_(parameters),
       joint_lower_(model.joint_lower), joint_upper_(model.joint_upper), max_substep_(max_substep) {}
 
-double StepMap::stop_term(int j, double q, double v, double a, double h) const {
+template <int A>
+double BasicStepMap<A>::stop_term(int j, double q, double v, double a, double h) const {
   const JointStop stop = joint_stop(q, v, joint_lower_[j], joint_upper_[j], parameters_);
   return stop.torque - h * stop.stiffness * v - (h * stop.damping + h * h * stop.stiffness) * a;
 }
 
-const ContactState& StepMap::evaluate_contact(const State& x) {
+template <int A>
+const BasicContactState<A>& BasicStepMap<A>::evaluate_contact(const State& x) {
   dynamics_.set_configuration(x.q);
   dynamics_.kinematics(x.v, kinematics_);
   contact_.evaluate(kinematics_, x.v, contact_state_);
   return contact_state_;
 }
 
+template <int A>
 template <class Substep>
-State StepMap::advance(const State& x, double dt, const Substep& substep) const {
+BasicState<A> BasicStepMap<A>::advance(const State& x, double dt, const Substep& substep) const {
   const int substeps = std::max(1, static_cast<int>(std::ceil(dt / max_substep_ - 1e-9)));
   const double nominal = dt / substeps;
   State next = x;
@@ -120,11 +131,13 @@ State StepMap::advance(const State& x, double dt, const Substep& substep) const 
   return next;
 }
 
-State StepMap::step(const State& x, const JointVector& tau, double dt, const Velocity& external) {
+template <int A>
+BasicState<A> BasicStepMap<A>::step(const State& x, const JointVector& tau, double dt, const Velocity& external) {
   return advance(x, dt, [&](State& s, const SubStep& sub) { substep(s, tau, sub.h, external, false); });
 }
 
-State StepMap::step_legs(const State& x, const JointVector& tau, double dt) {
+template <int A>
+BasicState<A> BasicStepMap<A>::step_joints(const State& x, const JointVector& tau, double dt) {
   return advance(x, dt,
                  [&](State& s, const SubStep& sub) { substep(s, tau, sub.h, Velocity::Zero(), true); });
 }
@@ -133,8 +146,9 @@ State StepMap::step_legs(const State& x, const JointVector& tau, double dt) {
 // guard's kMaxRotation / rate, and for the remainder minus the derivative of the time
 // elapsed before it. The rate's derivative reaches the chain through the last Rates rows of
 // the Jacobians (the rates they carry: all of v, or the legs' with the base held).
+template <int A>
 template <int Rates, class Jacobian, class ControlJacobian, class Linearised>
-State StepMap::linearise_chain(const State& x, double dt, Jacobian& fx, ControlJacobian& fu,
+BasicState<A> BasicStepMap<A>::linearise_chain(const State& x, double dt, Jacobian& fx, ControlJacobian& fu,
                                const Linearised& linearised) {
   using Row = Eigen::Matrix<double, 1, Jacobian::ColsAtCompileTime>;
   fx.setIdentity();
@@ -159,28 +173,31 @@ State StepMap::linearise_chain(const State& x, double dt, Jacobian& fx, ControlJ
   });
 }
 
-State StepMap::linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
+template <int A>
+BasicState<A> BasicStepMap<A>::linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
                          StepControlJacobian& fu) {
   return linearise_chain<kDofs>(x, dt, fx, fu, [&](State& s, double h, const StateRow& dh_x, const ControlRow& dh_u) {
     linearised_substep(s, tau, h, dh_x, dh_u, fx, fu);
   });
 }
 
-State StepMap::linearise_legs(const State& x, const JointVector& tau, double dt,
-                              LegStepJacobian& fz, LegControlJacobian& fu) {
+template <int A>
+BasicState<A> BasicStepMap<A>::linearise_joints(const State& x, const JointVector& tau, double dt,
+                              JointStepJacobian& fz, JointControlJacobian& fu) {
   return linearise_chain<kJoints>(x, dt, fz, fu,
-                                  [&](State& s, double h, const LegStateRow& dh_z, const ControlRow& dh_u) {
-                                    linearised_leg_substep(s, tau, h, dh_z, dh_u, fz, fu);
+                                  [&](State& s, double h, const JointStateRow& dh_z, const ControlRow& dh_u) {
+                                    linearised_joint_substep(s, tau, h, dh_z, dh_u, fz, fu);
                                   });
 }
 
-Velocity StepMap::acceleration(const State& x, const JointVector& tau, double h,
+template <int A>
+BasicVelocity<A> BasicStepMap<A>::acceleration(const State& x, const JointVector& tau, double h,
                                const Velocity& external, bool base_held) {
   // evaluate_contact() also sets the dynamics' configuration for M and c.
   const ContactState& contact = evaluate_contact(x);
   Velocity rhs = external - dynamics_.inverse_dynamics(x.v, Velocity::Zero()) +
                  ContactModel::generalized_force(contact);
-  rhs.tail<kJoints>() += tau;
+  rhs.template tail<kJoints>() += tau;
   iteration_matrix_ = dynamics_.mass_matrix();
   for (int i = 0; i < contact.count; ++i) {
     iteration_matrix_.noalias() -=
@@ -194,8 +211,8 @@ Velocity StepMap::acceleration(const State& x, const JointVector& tau, double h,
   }
   Velocity a = Velocity::Zero();
   if (base_held) {
-    leg_cholesky_.compute(iteration_matrix_.bottomRightCorner<kJoints, kJoints>());
-    a.tail<kJoints>() = leg_cholesky_.solve(rhs.tail<kJoints>());
+    joint_cholesky_.compute(iteration_matrix_.template bottomRightCorner<kJoints, kJoints>());
+    a.template tail<kJoints>() = joint_cholesky_.solve(rhs.template tail<kJoints>());
   } else {
     cholesky_.compute(iteration_matrix_);
     a = cholesky_.solve(rhs);
@@ -203,19 +220,21 @@ Velocity StepMap::acceleration(const State& x, const JointVector& tau, double h,
   return a;
 }
 
-void StepMap::substep(State& x, const JointVector& tau, double h, const Velocity& external,
+template <int A>
+void BasicStepMap<A>::substep(State& x, const JointVector& tau, double h, const Velocity& external,
                       bool base_held) {
   const Velocity a = acceleration(x, tau, h, external, base_held);
   if (base_held) {
-    x.v.tail<kJoints>() += h * a.tail<kJoints>();
-    x.q.tail<kJoints>() += h * x.v.tail<kJoints>();
+    x.v.template tail<kJoints>() += h * a.template tail<kJoints>();
+    x.q.template tail<kJoints>() += h * x.v.template tail<kJoints>();
     return;
   }
   x.v += h * a;
   move_configuration(x.q, x.v, h);
 }
 
-void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int first_q,
+template <int A>
+void BasicStepMap<A>::residual_jacobian(const State& x, const Velocity& a, double h, int first_q,
                                 int q_count, int first_v, int v_count) {
   const int points = contact_state_.count;
   damping_acceleration_.setZero();
@@ -294,7 +313,8 @@ void StepMap::residual_jacobian(const State& x, const Velocity& a, double h, int
   }
 }
 
-void StepMap::linearised_substep(State& x, const JointVector& tau, double h, const StateRow& dh_x,
+template <int A>
+void BasicStepMap<A>::linearised_substep(State& x, const JointVector& tau, double h, const StateRow& dh_x,
                                  const ControlRow& dh_u, StepJacobian& fx, StepControlJacobian& fu) {
   const Velocity a = acceleration(x, tau, h, Velocity::Zero(), false);
   residual_jacobian(x, a, h, 0, kConfigurationSize, 0, kDofs);
@@ -302,13 +322,13 @@ void StepMap::linearised_substep(State& x, const JointVector& tau, double h, con
   // [dv+/dx, dv+/dtau, dv+/dh] = h A^-1 [dr/dx, S^T, sum J^T D J a] + [(0 1), 0, a].
   constexpr int kColumns = kStateSize + kJoints + 1;
   Eigen::Matrix<double, kDofs, kColumns> velocity;
-  velocity.leftCols<kStateSize>() = residual_jacobian_;
-  velocity.middleCols<kJoints>(kStateSize).setZero();
-  velocity.block<kJoints, kJoints>(kBaseDofs, kStateSize).setIdentity();
+  velocity.template leftCols<kStateSize>() = residual_jacobian_;
+  velocity.template middleCols<kJoints>(kStateSize).setZero();
+  velocity.template block<kJoints, kJoints>(kBaseDofs, kStateSize).setIdentity();
   velocity.col(kColumns - 1) = damping_acceleration_;
   cholesky_.solveInPlace(velocity);
   velocity *= h;
-  velocity.middleCols<kDofs>(kConfigurationSize) += MassMatrix::Identity();
+  velocity.template middleCols<kDofs>(kConfigurationSize) += MassMatrix::Identity();
   velocity.col(kColumns - 1) += a;
 
   const Configuration q = x.q;
@@ -327,9 +347,9 @@ void StepMap::linearised_substep(State& x, const JointVector& tau, double h, con
     minus[3 + k] -= d;
     move_configuration(plus, x.v, h);
     move_configuration(minus, x.v, h);
-    by_quaternion.col(k) = (plus - minus).head<7>() / (2.0 * d);
+    by_quaternion.col(k) = (plus - minus).template head<7>() / (2.0 * d);
   }
-  by_quaternion.bottomRows<4>() -= Eigen::Matrix4d::Identity();
+  by_quaternion.template bottomRows<4>() -= Eigen::Matrix4d::Identity();
   Eigen::Matrix<double, 4, 3> by_omega;  // dquaternion+/domega+
   for (int k = 0; k < 3; ++k) {
     const double d = detail::fd_step(x.v[k], 1.0 / 3.0);
@@ -339,23 +359,23 @@ void StepMap::linearised_substep(State& x, const JointVector& tau, double h, con
     Configuration plus = q, minus = q;
     move_configuration(plus, v_plus, h);
     move_configuration(minus, v_minus, h);
-    by_omega.col(k) = (plus - minus).segment<4>(3) / (2.0 * d);
+    by_omega.col(k) = (plus - minus).template segment<4>(3) / (2.0 * d);
   }
   const Eigen::Quaterniond orientation(q[3], q[4], q[5], q[6]);
   const Matrix3 by_velocity = h * orientation.normalized().toRotationMatrix();  // dp+/dv_o+
   Configuration by_length;  // dq+/dh at fixed v+
-  by_length.head<3>() = by_velocity * x.v.segment<3>(3) / h;
-  by_length.segment<4>(3) = by_omega * x.v.head<3>() / h;
-  by_length.tail<kJoints>() = x.v.tail<kJoints>();
+  by_length.template head<3>() = by_velocity * x.v.template segment<3>(3) / h;
+  by_length.template segment<4>(3) = by_omega * x.v.template head<3>() / h;
+  by_length.template tail<kJoints>() = x.v.template tail<kJoints>();
 
   // The chain rule, F <- dx+/dx F + dx+/dh dh (+ dx+/dtau for fu), with F the derivative of
   // the sub-step's start x in the step's start (fx) or torques (fu): v+'s rows by (L1) first,
   // then q+'s from them by (S2)'s sparse G.
-  Eigen::Matrix<double, kDofs, kJoints> fu_velocity = velocity.middleCols<kJoints>(kStateSize);
-  fu_velocity.noalias() += velocity.leftCols<kStateSize>() * fu;
+  Eigen::Matrix<double, kDofs, kJoints> fu_velocity = velocity.template middleCols<kJoints>(kStateSize);
+  fu_velocity.noalias() += velocity.template leftCols<kStateSize>() * fu;
   fu_velocity.noalias() += velocity.col(kColumns - 1) * dh_u;
   Eigen::Matrix<double, kDofs, kStateSize> fx_velocity;
-  fx_velocity.noalias() = velocity.leftCols<kStateSize>() * fx;
+  fx_velocity.noalias() = velocity.template leftCols<kStateSize>() * fx;
   fx_velocity.noalias() += velocity.col(kColumns - 1) * dh_x;
   const auto chain = [&](auto& F, const auto& velocity_rows, const auto& dh) {
     F.template topRows<7>() += (by_quaternion * F.template middleRows<4>(3)).eval();
@@ -369,38 +389,42 @@ void StepMap::linearised_substep(State& x, const JointVector& tau, double h, con
   chain(fx, fx_velocity, dh_x);
 }
 
-void StepMap::linearised_leg_substep(State& x, const JointVector& tau, double h,
-                                     const LegStateRow& dh_z, const ControlRow& dh_u,
-                                     LegStepJacobian& fz, LegControlJacobian& fu) {
+template <int A>
+void BasicStepMap<A>::linearised_joint_substep(State& x, const JointVector& tau, double h,
+                                     const JointStateRow& dh_z, const ControlRow& dh_u,
+                                     JointStepJacobian& fz, JointControlJacobian& fu) {
   const Velocity a = acceleration(x, tau, h, Velocity::Zero(), true);
   residual_jacobian(x, a, h, kFirstJoint, kJoints, kBaseDofs, kJoints);
   // (L1) on the leg rows, as in linearised_substep with A22 for A.
   using LegMatrix = Eigen::Matrix<double, kJoints, kJoints>;
-  constexpr int kColumns = kLegStateSize + kJoints + 1;
+  constexpr int kColumns = kJointStateSize + kJoints + 1;
   Eigen::Matrix<double, kJoints, kColumns> velocity;
-  velocity.leftCols<kLegStateSize>() = residual_jacobian_.bottomLeftCorner<kJoints, kLegStateSize>();
-  velocity.middleCols<kJoints>(kLegStateSize).setIdentity();
-  velocity.col(kColumns - 1) = damping_acceleration_.tail<kJoints>();
-  leg_cholesky_.solveInPlace(velocity);
+  velocity.template leftCols<kJointStateSize>() = residual_jacobian_.template bottomLeftCorner<kJoints, kJointStateSize>();
+  velocity.template middleCols<kJoints>(kJointStateSize).setIdentity();
+  velocity.col(kColumns - 1) = damping_acceleration_.template tail<kJoints>();
+  joint_cholesky_.solveInPlace(velocity);
   velocity *= h;
-  velocity.middleCols<kJoints>(kJoints) += LegMatrix::Identity();
-  velocity.col(kColumns - 1) += a.tail<kJoints>();
+  velocity.template middleCols<kJoints>(kJoints) += LegMatrix::Identity();
+  velocity.col(kColumns - 1) += a.template tail<kJoints>();
 
-  x.v.tail<kJoints>() += h * a.tail<kJoints>();
-  x.q.tail<kJoints>() += h * x.v.tail<kJoints>();
+  x.v.template tail<kJoints>() += h * a.template tail<kJoints>();
+  x.q.template tail<kJoints>() += h * x.v.template tail<kJoints>();
   // z+ = (q_leg + h v_leg+, v_leg+).
-  LegStepJacobian phi;
-  phi.topRows<kJoints>() = h * velocity.leftCols<kLegStateSize>();
-  phi.topLeftCorner<kJoints, kJoints>() += LegMatrix::Identity();
-  phi.bottomRows<kJoints>() = velocity.leftCols<kLegStateSize>();
-  LegControlJacobian phi_u;
-  phi_u.topRows<kJoints>() = h * velocity.middleCols<kJoints>(kLegStateSize);
-  phi_u.bottomRows<kJoints>() = velocity.middleCols<kJoints>(kLegStateSize);
-  Eigen::Matrix<double, kLegStateSize, 1> dz_dh;
-  dz_dh.head<kJoints>() = x.v.tail<kJoints>() + h * velocity.col(kColumns - 1);
-  dz_dh.tail<kJoints>() = velocity.col(kColumns - 1);
+  JointStepJacobian phi;
+  phi.template topRows<kJoints>() = h * velocity.template leftCols<kJointStateSize>();
+  phi.template topLeftCorner<kJoints, kJoints>() += LegMatrix::Identity();
+  phi.template bottomRows<kJoints>() = velocity.template leftCols<kJointStateSize>();
+  JointControlJacobian phi_u;
+  phi_u.template topRows<kJoints>() = h * velocity.template middleCols<kJoints>(kJointStateSize);
+  phi_u.template bottomRows<kJoints>() = velocity.template middleCols<kJoints>(kJointStateSize);
+  Eigen::Matrix<double, kJointStateSize, 1> dz_dh;
+  dz_dh.template head<kJoints>() = x.v.template tail<kJoints>() + h * velocity.col(kColumns - 1);
+  dz_dh.template tail<kJoints>() = velocity.col(kColumns - 1);
   fu = phi * fu + phi_u + dz_dh * dh_u;
   fz = phi * fz + dz_dh * dh_z;
 }
+
+template class BasicStepMap<0>;
+template class BasicStepMap<1>;
 
 }  // namespace hmpc::humanoid

@@ -76,7 +76,7 @@ constexpr int kSolePoints = 2 * kFootPoints;      // 8, indices 0-3 left foot, 4
 constexpr int kSeatPoints = 6;                    // two ischia, two per thigh
 constexpr int kContactPoints = kSolePoints + kSeatPoints;
 
-using PointJacobian = Eigen::Matrix<double, 3, kDofs>;
+template <int A> using BasicPointJacobian = Eigen::Matrix<double, 3, Dimensions<A>::kDofs>;
 
 struct ContactPoint {
   int body = 0;
@@ -84,18 +84,25 @@ struct ContactPoint {
 };
 
 // Everything the step map and checks need about the contacts at one state.
-struct ContactState {
+template <int ArmJoints>
+struct BasicContactState {
   int count = 0;  // active points: kSolePoints, or kContactPoints with the chair
   std::array<Vector3, kContactPoints> position, velocity, force;  // world
-  std::array<PointJacobian, kContactPoints> jacobian;             // p_dot = J v
+  std::array<BasicPointJacobian<ArmJoints>, kContactPoints> jacobian;  // p_dot = J v
   // df / dp_dot, symmetric negative semi-definite (see ContactModel::point_force).
   std::array<Matrix3, kContactPoints> force_velocity;
 };
 
-class ContactModel {
+template <int ArmJoints>
+class BasicContactModel {
  public:
-  explicit ContactModel(const Model& model = Model{}, const Parameters& parameters = Parameters{},
-                        const ContactParameters& contact = ContactParameters{});
+  using Model = BasicModel<ArmJoints>;
+  using Kinematics = BasicKinematics<ArmJoints>;
+  using Velocity = BasicVelocity<ArmJoints>;
+  using ContactState = BasicContactState<ArmJoints>;
+
+  explicit BasicContactModel(const Model& model = Model{}, const Parameters& parameters = Parameters{},
+                             const ContactParameters& contact = ContactParameters{});
 
   const ContactParameters& parameters() const { return contact_; }
   ContactParameters& parameters() { return contact_; }
@@ -132,13 +139,19 @@ class ContactModel {
 };
 
 // Jacobian of a point fixed on `body` at `local` (body coordinates): p_dot = J v, p world.
-PointJacobian point_jacobian(const Model& model, const Kinematics& kinematics, int body,
-                             const Vector3& local);
+template <int A>
+BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model, const BasicKinematics<A>& kinematics,
+                                     int body, const Vector3& local);
 
 // sum of the active points' vertical forces, split into soles and seat.
 struct VerticalLoad {
   double sole = 0.0, seat = 0.0;
 };
-VerticalLoad vertical_load(const ContactState& state);
+template <int A>
+VerticalLoad vertical_load(const BasicContactState<A>& state);
+
+using PointJacobian = BasicPointJacobian<0>;
+using ContactState = BasicContactState<0>;
+using ContactModel = BasicContactModel<0>;
 
 }  // namespace hmpc::humanoid

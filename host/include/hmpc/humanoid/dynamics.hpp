@@ -31,15 +31,24 @@ using Vector6 = Eigen::Matrix<double, 6, 1>;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 
 // Poses and velocities of every body, for costs, contact and checks.
-struct Kinematics {
+template <int ArmJoints>
+struct BasicKinematics {
+  static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
   std::array<Matrix3, kBodies> rotation;   // body to world
   std::array<Vector3, kBodies> position;   // body origin in world
   std::array<Vector6, kBodies> velocity;   // spatial velocity (omega, v_origin), body coords
 };
 
-class Dynamics {
+template <int ArmJoints>
+class BasicDynamics {
  public:
-  explicit Dynamics(const Model& model = Model{});
+  using Model = BasicModel<ArmJoints>;
+  using Kinematics = BasicKinematics<ArmJoints>;
+  using Configuration = BasicConfiguration<ArmJoints>;
+  using Velocity = BasicVelocity<ArmJoints>;
+  using MassMatrix = BasicMassMatrix<ArmJoints>;
+
+  explicit BasicDynamics(const Model& model = Model{});
 
   const Model& model() const { return model_; }
 
@@ -64,6 +73,7 @@ class Dynamics {
   void kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const;
 
  private:
+  static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
   Model model_;
   std::array<Matrix6, kBodies> inertia_;     // spatial inertia about the body origin
   std::array<Vector6, kBodies> subspace_;    // motion subspace S of revolute joints
@@ -76,5 +86,9 @@ class Dynamics {
   // Factorised once at construction, so that a copy never reads an uninitialised state.
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
 };
+
+using Kinematics = BasicKinematics<0>;
+using Dynamics = BasicDynamics<0>;
+using ArmDynamics = BasicDynamics<1>;
 
 }  // namespace hmpc::humanoid

@@ -11,7 +11,7 @@
 // scale) the deviation zeta = z - z_hat* of Eq. 2.48 obeys Eq. 2.50b,
 //   epsilon Q22 zeta_v' = p_z,   epsilon Q22 = M22 (Q = M_leg / epsilon, Eq. 2.43),
 // p_z the leg rows of the thesis's c + u (Eq. 2.49): joint torques, minus our bias forces,
-// plus the contact forces. epsilon cancels, so the step is StepMap::step_legs: the leg rows
+// plus the contact forces. epsilon cancels, so the step is StepMap::step_joints: the leg rows
 // of the model with the base held, discretised like the full model (Eq. 2.51c with the step
 // map's sub-steps in place of one Euler step; z_hat* is piecewise constant, so zeta_v' = v_leg').
 //
@@ -29,7 +29,7 @@
 
 namespace hmpc::humanoid {
 
-constexpr int kFastStateSize = kLegStateSize;  // n_f = 16
+constexpr int kFastStateSize = kJointStateSize;  // n_f = 16
 using FastState = Eigen::Matrix<double, kFastStateSize, 1>;
 
 // z of Eq. 2.47 from x = (q, v), and x with its z replaced.
@@ -95,7 +95,7 @@ class FastSubsystem
   // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j.
   State dynamics(const State& zeta, const Control& nu, int j) const {
     const humanoid::State next =
-        step_maps_[j].step_legs(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
+        step_maps_[j].step_joints(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
     return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
   }
 
@@ -106,7 +106,7 @@ class FastSubsystem
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(zeta, nu, j, fz, fu);
     } else {
-      step_maps_[j].linearise_legs(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
+      step_maps_[j].linearise_joints(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
                                    fu);
     }
   }

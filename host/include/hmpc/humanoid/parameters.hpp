@@ -111,6 +111,17 @@ struct Parameters {
   // body mass at the hip and knee (peak isometric human values for a 47 kg adult are of this
   // order), less for abduction and the ankle.
   std::array<double, kJointsPerLeg> torque_limit{100.0, 150.0, 150.0, 100.0};
+
+  // The reaching variant's right arm (model.hpp): upper arm, forearm and hand as one rigid
+  // body, elbow and wrist held straight, on a shoulder flexion joint (the thesis's arm has one
+  // joint, Sec. 2.6.2, n = 31, and names none). Range: shoulder flexion 180 deg, extension
+  // 60 deg (Greene & Heckman 1994, as the legs'). Torque limit (choice): 30 N m, five times
+  // the 5.4 N m that holds the straight arm (2.1 kg, centre of mass 0.26 m from the shoulder)
+  // horizontal. Armature as the legs' joints.
+  double arm_lower = -1.0472;       // [rad] extension 60 deg
+  double arm_upper = 3.1416;        // [rad] flexion 180 deg
+  double arm_torque_limit = 30.0;   // [N m]
+  double arm_armature = 0.05;       // [kg m^2]
 };
 
 }  // namespace hmpc::humanoid

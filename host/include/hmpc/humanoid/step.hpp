@@ -34,7 +34,7 @@
 // (every physically meaningful motion) the sub-steps are the fixed ones above, so the step
 // map is smooth there; the guard only keeps wild optimiser rollouts finite.
 //
-// Linearisation (linearise, linearise_legs): the step's Jacobians are the product of its
+// Linearisation (linearise, linearise_joints): the step's Jacobians are the product of its
 // sub-steps' Jacobians (chain rule). In a sub-step, a = dv / h solves A a = b with
 // A = M - h sum_i J_i^T D_i J_i and b the bracket of (S1); differentiating A a = b at the
 // nominal a gives
@@ -67,9 +67,10 @@
 
 namespace hmpc::humanoid {
 
-struct State {
-  Configuration q;
-  Velocity v;
+template <int ArmJoints>
+struct BasicState {
+  BasicConfiguration<ArmJoints> q;
+  BasicVelocity<ArmJoints> v;
 };
 
 // The end stops' torque on one joint at angle q and rate v (Parameters::stop_*), with the
@@ -80,22 +81,36 @@ struct JointStop {
 };
 JointStop joint_stop(double q, double v, double lower, double upper, const Parameters& parameters);
 
-// Jacobians of a step, x = (q, v) stacked (29) and the legs' z = (q_leg, v_leg) (16).
-constexpr int kLegStateSize = 2 * kJoints;
-using StateVector = Eigen::Matrix<double, kStateSize, 1>;
-using StepJacobian = Eigen::Matrix<double, kStateSize, kStateSize>;        // dx+ / dx
-using StepControlJacobian = Eigen::Matrix<double, kStateSize, kJoints>;    // dx+ / dtau
-using LegStepJacobian = Eigen::Matrix<double, kLegStateSize, kLegStateSize>;     // dz+ / dz
-using LegControlJacobian = Eigen::Matrix<double, kLegStateSize, kJoints>;        // dz+ / dtau
-
-class StepMap {
+// The step map of a variant (model.hpp). Jacobians of a step: x = (q, v) stacked (n = 29 or
+// 31), and the joints' z = (q_joints, v_joints) (the thesis's fast state, n_f = 16 or 18).
+template <int ArmJoints>
+class BasicStepMap {
  public:
+  using D = Dimensions<ArmJoints>;
+  static constexpr int kJoints = D::kJoints, kDofs = D::kDofs, kStateSize = D::kStateSize,
+                       kConfigurationSize = D::kConfigurationSize, kJointStateSize = 2 * kJoints;
+  using Model = BasicModel<ArmJoints>;
+  using Configuration = BasicConfiguration<ArmJoints>;
+  using Velocity = BasicVelocity<ArmJoints>;
+  using JointVector = BasicJointVector<ArmJoints>;
+  using MassMatrix = BasicMassMatrix<ArmJoints>;
+  using State = BasicState<ArmJoints>;
+  using Dynamics = BasicDynamics<ArmJoints>;
+  using ContactModel = BasicContactModel<ArmJoints>;
+  using ContactState = BasicContactState<ArmJoints>;
+  using PointJacobian = BasicPointJacobian<ArmJoints>;
+  using StateVector = Eigen::Matrix<double, kStateSize, 1>;
+  using StepJacobian = Eigen::Matrix<double, kStateSize, kStateSize>;               // dx+ / dx
+  using StepControlJacobian = Eigen::Matrix<double, kStateSize, kJoints>;           // dx+ / dtau
+  using JointStepJacobian = Eigen::Matrix<double, kJointStateSize, kJointStateSize>;  // dz+ / dz
+  using JointControlJacobian = Eigen::Matrix<double, kJointStateSize, kJoints>;     // dz+ / dtau
+
   static constexpr double kMaxRotation = 0.2;  // [rad] per sub-step, see above
   static constexpr int kMaxRefinement = 1000;
 
-  explicit StepMap(const Model& model = Model{}, const Parameters& parameters = Parameters{},
-                   const ContactParameters& contact = ContactParameters{},
-                   double max_substep = 1e-3);
+  explicit BasicStepMap(const Model& model = Model{}, const Parameters& parameters = Parameters{},
+                        const ContactParameters& contact = ContactParameters{},
+                        double max_substep = 1e-3);
 
   // x_{k+1} from x_k under joint torques tau held for dt (> 0), by (S1)-(S2).
   State step(const State& x, const JointVector& tau, double dt,
@@ -103,18 +118,18 @@ class StepMap {
 
   // The fast subsystem's step (Eqs. 2.50-2.51, fast_subsystem.hpp): the base held, pose and
   // velocity (Eq. 2.28: the slow variables are constant on the fast time scale), and the
-  // legs moved by the leg rows of (S1) with the base acceleration zero,
-  //   (M22 - h sum_i J_i,leg^T D_i J_i,leg) dv_leg = h (tau - c_leg + (sum_i J_i^T f_i)_leg),
+  // joints moved by the joint rows of (S1) with the base acceleration zero,
+  //   (M22 - h sum_i J_i,z^T D_i J_i,z) dv_z = h (tau - c_z + (sum_i J_i^T f_i)_z),
   // M22 = epsilon Q22 of Eq. 2.50b. Same sub-steps as step().
-  State step_legs(const State& x, const JointVector& tau, double dt);
+  State step_joints(const State& x, const JointVector& tau, double dt);
 
   // step(x, tau, dt) (no tau_ext), the same numbers, and its Jacobians by (L1)-(L2).
   State linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
                   StepControlJacobian& fu);
-  // step_legs(x, tau, dt), the same numbers, and its Jacobians with respect to the legs' z
-  // and tau by (L1)-(L2) restricted to the leg rows and columns (the base held).
-  State linearise_legs(const State& x, const JointVector& tau, double dt, LegStepJacobian& fz,
-                       LegControlJacobian& fu);
+  // step_joints(x, tau, dt), the same numbers, and its Jacobians with respect to the joints'
+  // z and tau by (L1)-(L2) restricted to the joint rows and columns (the base held).
+  State linearise_joints(const State& x, const JointVector& tau, double dt, JointStepJacobian& fz,
+                         JointControlJacobian& fu);
 
   // The contact state last evaluated (forces, points, Jacobians): at the start of the last
   // sub-step, or by evaluate_contact(); after a linearisation, at some perturbed state.
@@ -135,7 +150,7 @@ class StepMap {
     Rule rule;
   };
   using StateRow = Eigen::Matrix<double, 1, kStateSize>;
-  using LegStateRow = Eigen::Matrix<double, 1, kLegStateSize>;
+  using JointStateRow = Eigen::Matrix<double, 1, kJointStateSize>;
   using ControlRow = Eigen::Matrix<double, 1, kJoints>;
 
   // dt cut into sub-steps (see above), each done by substep(x, SubStep).
@@ -143,9 +158,9 @@ class StepMap {
   State advance(const State& x, double dt, const Substep& substep) const;
   void substep(State& x, const JointVector& tau, double h, const Velocity& external,
                bool base_held);
-  // (S1)'s a = dv / h at x (base_held: its first six entries zero, the rest from the leg
+  // (S1)'s a = dv / h at x (base_held: its first six entries zero, the rest from the joint
   // rows); leaves kinematics_, contact_state_, the dynamics' configuration and the Cholesky
-  // factor of A (cholesky_, or leg_cholesky_) at x.
+  // factor of A (cholesky_, or joint_cholesky_) at x.
   Velocity acceleration(const State& x, const JointVector& tau, double h, const Velocity& external,
                         bool base_held);
   // For the linearisation, right after acceleration(x, ...) returned a: dr/dx of (L2) into
@@ -155,17 +170,18 @@ class StepMap {
   // contact_state_, kinematics_ and the dynamics at perturbed states.
   void residual_jacobian(const State& x, const Velocity& a, double h, int first_q, int q_count,
                          int first_v, int v_count);
-  // linearise()'s and linearise_legs()'s chain over the sub-steps: fx = I, fu = 0, then per
+  // linearise()'s and linearise_joints()'s chain over the sub-steps: fx = I, fu = 0, then per
   // sub-step linearised(s, h, dh_x, dh_u) with the length's derivatives (see step.cpp).
   template <int Rates, class Jacobian, class ControlJacobian, class Linearised>
   State linearise_chain(const State& x, double dt, Jacobian& fx, ControlJacobian& fu,
                         const Linearised& linearised);
-  // One sub-step of linearise() (linearise_legs()): x moved as by substep(), fx and fu
+  // One sub-step of linearise() (linearise_joints()): x moved as by substep(), fx and fu
   // (fz, fu) multiplied by its Jacobians; dh: the sub-step length's derivatives.
   void linearised_substep(State& x, const JointVector& tau, double h, const StateRow& dh_x,
                           const ControlRow& dh_u, StepJacobian& fx, StepControlJacobian& fu);
-  void linearised_leg_substep(State& x, const JointVector& tau, double h, const LegStateRow& dh_z,
-                              const ControlRow& dh_u, LegStepJacobian& fz, LegControlJacobian& fu);
+  void linearised_joint_substep(State& x, const JointVector& tau, double h,
+                                const JointStateRow& dh_z, const ControlRow& dh_u,
+                                JointStepJacobian& fz, JointControlJacobian& fu);
 
   // The end stops' part of (L2)'s r for joint j at (q, v) and the nominal acceleration a
   // (see step.hpp's file comment).
@@ -177,17 +193,27 @@ class StepMap {
   JointVector joint_lower_, joint_upper_;
   double max_substep_;
   // Workspace.
-  Kinematics kinematics_;
+  BasicKinematics<ArmJoints> kinematics_;
   ContactState contact_state_;
   MassMatrix iteration_matrix_;
   // Factorised once at construction, so that a copy never reads an uninitialised state.
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
-  Eigen::LLT<Eigen::Matrix<double, kJoints, kJoints>> leg_cholesky_{
+  Eigen::LLT<Eigen::Matrix<double, kJoints, kJoints>> joint_cholesky_{
       Eigen::Matrix<double, kJoints, kJoints>::Identity()};
   // Linearisation workspace (residual_jacobian()).
   Eigen::Matrix<double, kDofs, kStateSize> residual_jacobian_;
   std::array<Velocity, kContactPoints> contact_terms_;  // J_i^T (f_i + h D_i J_i a) at x
   Velocity damping_acceleration_;
 };
+
+using State = BasicState<0>;
+using StepMap = BasicStepMap<0>;
+using ArmStepMap = BasicStepMap<1>;
+constexpr int kJointStateSize = StepMap::kJointStateSize;  // 16
+using StateVector = StepMap::StateVector;
+using StepJacobian = StepMap::StepJacobian;
+using StepControlJacobian = StepMap::StepControlJacobian;
+using JointStepJacobian = StepMap::JointStepJacobian;
+using JointControlJacobian = StepMap::JointControlJacobian;
 
 }  // namespace hmpc::humanoid
