@@ -19,7 +19,8 @@ void usage(std::FILE* out) {
   std::fprintf(out,
                "usage: hmpc-humanoid --motion NAME|FILE [options]\n"
                "  --motion NAME|FILE  a motion file, or the name of one shipped in\n"
-               "                      " HMPC_HUMANOID_MOTIONS " (e.g. I-standing, V-low-jump)\n"
+               "                      " HMPC_HUMANOID_MOTIONS " (e.g. I-standing, V-low-jump,\n"
+               "                      reaching)\n"
                "  --mpc KIND          fine, coarse or coarse-fast (default: coarse-fast)\n"
                "  --duration S        simulated seconds, 0.03..60 (default: the motion file's)\n"
                "  --threads T         linearisation threads, 1..64 (default: 2)\n"
@@ -38,6 +39,50 @@ std::string motion_path(const std::string& value) {
   return std::string(HMPC_HUMANOID_MOTIONS) + "/" + value + ".motion";
 }
 
+
+// The run on the biped (A = 0) or, for a reaching motion, the robot with an arm (A = 1).
+template <int A>
+int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const std::string& stem,
+                   const std::string& out, int frames) {
+  const BasicClosedLoopRun<A> run = run_closed_loop<A>(motion, config);
+  const ClosedLoopSummary s = summarise(run);
+  const BasicClosedLoopSample<A>& last = run.samples.back();
+  std::printf("motion %s, %s MPC%s, %.2f s simulated\n", stem.c_str(), name_of(config.mpc),
+              config.warm_start ? "" : " (no warm start)", last.time);
+  std::printf("base point height %.3f..%.3f m, final %.3f m; final velocity (%.2f, %.2f, %.2f) m/s\n",
+              s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
+              last.base.velocity.y(), last.base.velocity.z());
+  std::printf("solve per 30 ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
+              "truncated %d, unusable %d of %zu\n",
+              s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.unusable,
+              run.samples.size());
+  std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
+  if (run.fell()) {
+    std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n", run.fell_at,
+                config.fallen_clearance);
+  }
+
+  if constexpr (A == 1) {
+    const PhysicalCheck check = check_reaching(motion, run);
+    std::printf("physical check of reaching: %s: %s\n", check.passed ? "PASSED" : "FAILED",
+                check.verdict.c_str());
+  } else {
+    const std::string numeral = motion_numeral(stem);
+    if (!numeral.empty()) {
+      const PhysicalCheck check = check_motion(numeral, motion, run);
+      std::printf("physical check of motion %s: %s: %s\n", numeral.c_str(),
+                  check.passed ? "PASSED" : "FAILED", check.verdict.c_str());
+    }
+  }
+  const std::string title = stem + ", " + name_of(config.mpc) + " MPC";
+  std::string error;
+  if (!write_run(out, title, motion, run, frames, error)) {
+    std::fprintf(stderr, "hmpc-humanoid: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("wrote %s/trajectory.csv, filmstrip.png, base.png\n", out.c_str());
+  return run.fell() ? kFellStatus : 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -85,35 +130,6 @@ int main(int argc, char** argv) {
   const std::string stem = std::filesystem::path(motion_path(motion_name)).stem().string();
   if (out.empty()) out = "humanoid-" + stem + "-" + name_of(config.mpc);
 
-  const ClosedLoopRun run = run_closed_loop(motion, config);
-  const ClosedLoopSummary s = summarise(run);
-  const ClosedLoopSample& last = run.samples.back();
-  std::printf("motion %s, %s MPC%s, %.2f s simulated\n", stem.c_str(), name_of(config.mpc),
-              config.warm_start ? "" : " (no warm start)", last.time);
-  std::printf("base point height %.3f..%.3f m, final %.3f m; final velocity (%.2f, %.2f, %.2f) m/s\n",
-              s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
-              last.base.velocity.y(), last.base.velocity.z());
-  std::printf("solve per 30 ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
-              "truncated %d, unusable %d of %zu\n",
-              s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.unusable,
-              run.samples.size());
-  std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
-  if (run.fell()) {
-    std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n", run.fell_at,
-                config.fallen_clearance);
-  }
-
-  const std::string numeral = motion_numeral(stem);
-  if (!numeral.empty()) {
-    const PhysicalCheck check = check_motion(numeral, motion, run);
-    std::printf("physical check of motion %s: %s: %s\n", numeral.c_str(), check.passed ? "PASSED" : "FAILED",
-                check.verdict.c_str());
-  }
-  const std::string title = stem + ", " + name_of(config.mpc) + " MPC";
-  if (!write_run(out, title, motion, run, frames, error)) {
-    std::fprintf(stderr, "hmpc-humanoid: %s\n", error.c_str());
-    return 1;
-  }
-  std::printf("wrote %s/trajectory.csv, filmstrip.png, base.png\n", out.c_str());
-  return run.fell() ? kFellStatus : 0;
+  return motion.reach.active ? run_and_report<1>(motion, config, stem, out, frames)
+                             : run_and_report<0>(motion, config, stem, out, frames);
 }

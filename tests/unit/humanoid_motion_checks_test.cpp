@@ -1,5 +1,5 @@
-// The physical checks of issue 5 for the humanoid's dynamic motions (II, IV-VII) and a push
-// recovery, each a closed-loop run under Coarse-Fast MPC (closed_loop.hpp), untruncated
+// The physical checks of issue 5 for the humanoid's dynamic motions (II, IV-VII), whole-body
+// reaching with the robot with an arm, and a push recovery, each a closed-loop run under Coarse-Fast MPC (closed_loop.hpp), untruncated
 // (test::run). Label long: minutes under AddressSanitizer, which CI's host-asan preset skips;
 // host-release runs them.
 #include <gtest/gtest.h>
@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hmpc/humanoid/physical_checks.hpp"
+#include "hmpc/humanoid/viewing.hpp"
 #include "humanoid_test_motions.hpp"
 
 namespace {
@@ -57,6 +58,21 @@ TEST(HumanoidMotionChecks, CoarseFastJumpsHigherThanTheLowJump) {
 // Motion VI (issue 5's check): motion V's checks, and the yaw turned by pi +- 0.3 rad.
 TEST(HumanoidMotionChecks, CoarseFastJumpsWithAHalfTurn) {
   expect_check_passes("VI-half-turn-jump");
+}
+
+// Reaching (issue 5's check, Eq. 2.53): the robot with an arm steps towards the target and
+// brings its hand's centre within 5 cm of it, without a fall over the motion's 4 s.
+TEST(HumanoidMotionChecks, CoarseFastReachesTheTarget) {
+  const Motion m = motion("reaching");
+  const ArmClosedLoopRun r = run<1>(m, MpcKind::kCoarseFast, m.duration);
+  const PhysicalCheck check = check_reaching(m, r);
+  std::printf("reaching, Coarse-Fast: %s\n", check.verdict.c_str());
+  EXPECT_TRUE(check.passed) << check.verdict;
+  // The whole body had to move: from the start's stance the arm alone leaves the hand more
+  // than 0.3 m short (the shoulder-to-target distance less the shoulder-to-hand length).
+  const StickFigure stance = stick_figure(r.initial);
+  const double arm = (stance.hand - stance.shoulder).norm();
+  EXPECT_GT((m.reach.target - stance.shoulder).norm() - arm, 0.3);
 }
 
 // Recovery from a push: motion I's targets, but 0.5 m/s asked for in the first 0.3 s, then

@@ -4,11 +4,15 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <initializer_list>
+#include <stdexcept>
+#include <utility>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "hmpc/humanoid/motion.hpp"
+#include "hmpc/humanoid/problem.hpp"
 
 namespace {
 
@@ -187,6 +191,42 @@ TEST(HumanoidMotion, ParsesTheValidFile) {
   EXPECT_DOUBLE_EQ(gait.gait.period, 0.6);
   EXPECT_DOUBLE_EQ(gait.gait.swing_height, 0.05);
   EXPECT_DOUBLE_EQ(gait.gait.swing_fraction, 0.4);
+}
+
+// The optional [reach] section (Eq. 2.53): read into Motion::reach; without it, no reaching.
+const std::string kReach = kValid + R"([reach]
+target = 0.7 -0.12 0.7
+start = 0.8
+w_reach = 1e4
+w_SFE = 1e-3
+)";
+
+TEST(HumanoidMotion, ReadsTheReachSection) {
+  EXPECT_FALSE(parse(kValid).reach.active);
+  const Motion m = parse(kReach);
+  ASSERT_TRUE(m.reach.active);
+  EXPECT_EQ(m.reach.target, Eigen::Vector3d(0.7, -0.12, 0.7));
+  EXPECT_DOUBLE_EQ(m.reach.start, 0.8);
+  EXPECT_DOUBLE_EQ(m.reach.weight, 1e4);
+  EXPECT_DOUBLE_EQ(m.reach.control, 1e-3);
+  for (const auto& [text, expected] : std::initializer_list<std::pair<std::string, std::string>>{
+           {replace(kReach, "w_SFE = 1e-3\n", ""), "w_SFE: missing key in [reach]"},
+           {replace(kReach, "start = 0.8", "start = -1"), "start: must be >= 0"},
+           {replace(kReach, "w_reach = 1e4", "w_reach = -1"), "w_reach: a weight must be >= 0"},
+           {replace(kReach, "target = 0.7 -0.12 0.7", "target = 0.7 -0.12"), "target: expected 3 numbers"},
+           {kReach + "[reach]\ntarget = 0 0 0\nstart = 0\nw_reach = 1\nw_SFE = 1\n", "section [reach] repeated"}}) {
+    const std::string message = error_of(text);
+    EXPECT_NE(message.find(expected), std::string::npos) << "got '" << message << "', expected '" << expected << "'";
+  }
+}
+
+// A reaching motion needs the robot with an arm, and that robot runs nothing else: a clear
+// error, not a cost without its hand term.
+TEST(HumanoidMotion, ReachingAndTheRobotMustMatch) {
+  const ProblemConfig config;
+  EXPECT_THROW(StateCost(parse(kReach), standing_state(config, 0.85), config), std::invalid_argument);
+  EXPECT_THROW(BasicStateCost<1>(parse(kValid), standing_state<1>(config, 0.85), config), std::invalid_argument);
+  EXPECT_NO_THROW(BasicStateCost<1>(parse(kReach), standing_state<1>(config, 0.85), config));
 }
 
 TEST(HumanoidMotion, GaitSwingsTheFeetInTurn) {

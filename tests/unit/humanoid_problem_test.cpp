@@ -120,7 +120,7 @@ TEST(HumanoidProblem, LegAngleTermsFollowTheirEquations) {
   // Eq. 4.29: abducting the left hip moves beta_L only.
   x = x0;
   x.q[7 + kHipAbduction] += 0.1;
-  const CostResidual r = cost.residual(to_vector(x), 0.0);
+  const StateCost::CostResidual r = cost.residual(to_vector(x), 0.0);
   EXPECT_NEAR(r[9], 0.0, 1e-15);
   EXPECT_GT(std::abs(r[10]), std::sqrt(5.0) * 0.05);
 }
@@ -150,7 +150,7 @@ TEST(HumanoidProblem, FootHeightTermFollowsTheGait) {
   m.gait = Gait{0.6, 0.05, 0.4};
   const StateCost cost(m, x0, config);
   // t = 0.12 s: the left foot half-way through its swing, 5 cm up; the right in stance.
-  const CostResidual r = cost.residual(to_vector(x0), 0.12);
+  const StateCost::CostResidual r = cost.residual(to_vector(x0), 0.12);
   EXPECT_NEAR(r[14], 2.0 * (-sink - 0.05), 1e-9);  // left heel
   EXPECT_NEAR(r[15], 2.0 * (-sink - 0.05), 1e-9);  // left toe
   EXPECT_NEAR(r[16], 2.0 * -sink, 1e-9);           // right heel
@@ -291,6 +291,28 @@ TEST(HumanoidThreadPool, RunsTasksConcurrently) {
     if (started.load() == 2) ++met;
   });
   EXPECT_EQ(met.load(), 2);
+}
+
+// Eq. 2.53 on the robot with an arm: the last three residuals are sqrt(w_reach) times the
+// hand's offset from the target from the reach's start on, zero before; the shoulder torque
+// is weighted by w_SFE.
+TEST(HumanoidProblem, ReachTermPullsTheHandFromItsStart) {
+  const ProblemConfig config;
+  const Motion m = test::motion("reaching");
+  const BasicState<1> x0 = standing_state<1>(config, 0.85);
+  const BasicStateCost<1> cost(m, x0, config);
+  const Vector3 hand = cost.features(x0).hand;
+  const auto before = cost.residual(to_vector(x0), m.reach.start - 0.01);
+  const auto after = cost.residual(to_vector(x0), m.reach.start);
+  EXPECT_EQ(before.tail<3>(), Vector3::Zero());
+  EXPECT_LE((after.tail<3>() - std::sqrt(m.reach.weight) * (hand - m.reach.target)).norm(), 1e-12);
+  EXPECT_EQ(before.head<kCostResiduals<0>>(), after.head<kCostResiduals<0>>());
+  EXPECT_EQ(cost.control_weights()[Dimensions<1>::kArmJoint], m.reach.control);
+  // Raising the arm forward brings the hand closer: the term's gradient points the right way.
+  BasicStateCost<1>::StateVector lx;
+  BasicStateCost<1>::StateMatrix lxx;
+  cost.derivatives(to_vector(x0), m.reach.start, lx, lxx);
+  EXPECT_LT(lx[7 + Dimensions<1>::kArmJoint], 0.0);
 }
 
 }  // namespace

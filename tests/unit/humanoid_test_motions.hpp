@@ -27,13 +27,14 @@ inline Motion motion(const std::string& name) {
 // A closed-loop run without truncation: a truncated solve depends on the machine's load, and
 // ctest shares 2 cores; without it a run is the same numbers every time (the thread pool's
 // results are bit-identical to serial ones). Solve times against the 30 ms sampling time are
-// measured by humanoid_mpc_bench --closed-loop.
-inline ClosedLoopRun run(const Motion& m, MpcKind kind, double duration) {
+// measured by humanoid_mpc_bench --closed-loop. A = 1: the robot with an arm (reaching).
+template <int A = 0>
+BasicClosedLoopRun<A> run(const Motion& m, MpcKind kind, double duration) {
   ClosedLoopConfig config;
   config.mpc = kind;
   config.duration = duration;
   config.truncate = false;
-  return run_closed_loop(m, config);
+  return run_closed_loop<A>(m, config);
 }
 
 }  // namespace hmpc::humanoid::test

@@ -15,45 +15,50 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
 
-IlqrConfig<double> layer_solver() {
-  return IlqrConfig<double>::with_cap_and_tolerance(kIterationCap, kTolerance);
-}
-
-template <int N>
-std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N>, N>> make_single_layer(
-    const Motion& motion, const State& initial, ThreadPool* pool, ProblemConfig config, double step) {
+template <int N, int A>
+std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N, A>, N>> make_single_layer(
+    const Motion& motion, const BasicState<A>& initial, ThreadPool* pool, ProblemConfig config,
+    double step) {
   config.contact = contact_for(motion, config.contact);
   config.step = step;
-  typename RecedingHorizonMpc<HumanoidProblem<N>, N>::Config mpc;
-  mpc.solver = layer_solver();
+  typename RecedingHorizonMpc<HumanoidProblem<N, A>, N>::Config mpc;
+  mpc.solver = layer_solver(motion);
   mpc.steps_per_sample = static_cast<int>(kSamplingPeriod / step + 0.5);
-  return std::make_unique<RecedingHorizonMpc<HumanoidProblem<N>, N>>(
-      HumanoidProblem<N>(motion, initial, config, pool), mpc);
+  return std::make_unique<RecedingHorizonMpc<HumanoidProblem<N, A>, N>>(
+      HumanoidProblem<N, A>(motion, initial, config, pool), mpc);
 }
 
 // What the loop needs from each MPC.
 template <class Mpc>
 auto& problem_of(Mpc& mpc) { return mpc.problem(); }
-auto& problem_of(CoarseFast& mpc) { return mpc.upper_problem(); }
+template <int A>
+auto& problem_of(BasicCoarseFast<A>& mpc) { return mpc.upper_problem(); }
 template <class Mpc>
 int iterations_of(const Mpc& mpc) { return mpc.last_result().iterations; }
-int iterations_of(const CoarseFast& mpc) { return mpc.last_upper_result().iterations; }
+template <int A>
+int iterations_of(const BasicCoarseFast<A>& mpc) { return mpc.last_upper_result().iterations; }
 template <class Mpc>
 int fast_iterations_of(const Mpc&) { return 0; }
-int fast_iterations_of(const CoarseFast& mpc) { return mpc.last_fast_result().iterations; }
+template <int A>
+int fast_iterations_of(const BasicCoarseFast<A>& mpc) { return mpc.last_fast_result().iterations; }
 template <class Mpc>
 bool stopped_early(const Mpc& mpc) { return mpc.last_result().status == SolveStatus::kBudgetExhausted; }
-bool stopped_early(const CoarseFast& mpc) {
+template <int A>
+bool stopped_early(const BasicCoarseFast<A>& mpc) {
   return mpc.last_upper_result().status == SolveStatus::kBudgetExhausted ||
          mpc.last_fast_result().status == SolveStatus::kBudgetExhausted;
 }
 
-bool finite(const State& x) { return x.q.allFinite() && x.v.allFinite(); }
+template <int A>
+bool finite(const BasicState<A>& x) { return x.q.allFinite() && x.v.allFinite(); }
 
 // Height above the ground of the lowest part other than the feet: head, torso origin (mid-hip),
 // hip joints, knees (ClosedLoopConfig::fallen_clearance).
-double lowest_non_foot_point(const Dynamics& dynamics, const Model& model, const State& x) {
-  Kinematics kin;
+template <int A>
+double lowest_non_foot_point(const BasicDynamics<A>& dynamics, const BasicState<A>& x) {
+  using Model = BasicModel<A>;
+  const Model& model = dynamics.model();
+  BasicKinematics<A> kin;
   dynamics.kinematics(x.q, x.v, kin);
   double lowest = std::min(kin.position[0].z(), (kin.position[0] + kin.rotation[0] * model.vertex).z());
   for (int leg = 0; leg < 2; ++leg) {
@@ -98,30 +103,32 @@ constexpr double kUpperShare = 0.75;
 
 // One update within the sampling period. Coarse-Fast: the upper layer until kUpperShare of the
 // period, the lower layer until its end.
-template <class Mpc>
-void update(Mpc& mpc, const State& x, Clock::time_point start, bool truncate) {
+template <class Mpc, int A>
+void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate) {
   DeadlineStop stop(start + period(1.0), truncate);
   mpc.update(to_vector(x), stop);
 }
-void update(CoarseFast& mpc, const State& x, Clock::time_point start, bool truncate) {
+template <int A>
+void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate) {
   DeadlineStop upper(start + period(kUpperShare), truncate), fast(start + period(1.0), truncate);
   mpc.update(to_vector(x), upper, fast);
 }
 
-template <class Mpc>
-ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
-                       const State& initial, double duration) {
+template <class Mpc, int A>
+BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
+                               const BasicState<A>& initial, double duration) {
+  using State = BasicState<A>;
   ProblemConfig plant = config.problem;
   plant.contact = contact_for(motion, config.problem.contact);
-  const StateCost observer(motion, initial, plant);
-  const Model model(plant.parameters);
-  const Dynamics body(model);
-  StepMap simulator(model, plant.parameters, plant.contact, kSimulatorStep);
+  const BasicStateCost<A> observer(motion, initial, plant);
+  const BasicModel<A> model(plant.parameters);
+  const BasicDynamics<A> body(model);
+  BasicStepMap<A> simulator(model, plant.parameters, plant.contact, kSimulatorStep);
   constexpr int kFineSteps = kFineStepsPerCoarseStep;  // 10 ms input steps per sample
   constexpr int kSimulatorSteps = static_cast<int>(kFastStep / kSimulatorStep + 0.5);
 
   if (config.warm_start) mpc.initialize(to_vector(initial), kOfflineIterations);
-  ClosedLoopRun run;
+  BasicClosedLoopRun<A> run;
   run.initial = initial;
   const int count = static_cast<int>(duration / kSamplingPeriod + 0.5);
   run.samples.reserve(count);
@@ -131,12 +138,12 @@ ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& c
     problem_of(mpc).set_start_time(t0);
     const auto start = Clock::now();
     update(mpc, x, start, config.truncate);
-    ClosedLoopSample sample;
+    BasicClosedLoopSample<A> sample;
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);
     sample.torque = mpc.planned_control(0);
     for (int j = 0; j < kFineSteps; ++j) {
-      const JointVector u = mpc.planned_control(j);
+      const BasicJointVector<A> u = mpc.planned_control(j);
       for (int i = 0; i < kSimulatorSteps; ++i) {
         const double t = t0 + (j * kSimulatorSteps + i) * kSimulatorStep;
         sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
@@ -151,14 +158,14 @@ ClosedLoopRun simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& c
     sample.plan_usable = mpc.last_plan_usable();
     if (finite(x)) {
       sample.base = observer.features(x);
-      const ContactState& contact = simulator.evaluate_contact(x);
+      const BasicContactState<A>& contact = simulator.evaluate_contact(x);
       for (int i = 0; i < contact.count; ++i) {
         const double fz = contact.force[i].z();
         (i < kFootPoints ? sample.left_force : i < kSolePoints ? sample.right_force : sample.seat_force) += fz;
       }
     }
     run.samples.push_back(sample);
-    if (!finite(x) || lowest_non_foot_point(body, model, x) < config.fallen_clearance) {
+    if (!finite(x) || lowest_non_foot_point(body, x) < config.fallen_clearance) {
       run.fell_at = sample.time;
       break;
     }
@@ -180,7 +187,8 @@ bool parse_mpc_kind(const std::string& name, MpcKind& kind) {
   return false;
 }
 
-ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& config) {
+template <int A>
+BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config) {
   if (!(config.duration >= 0.0) || !std::isfinite(config.duration)) {
     throw std::invalid_argument("closed loop: the duration must be a positive number of seconds");
   }
@@ -195,14 +203,14 @@ ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& conf
   ThreadPool* workers = config.threads > 1 ? &pool : nullptr;
   ProblemConfig start = config.problem;
   start.contact = contact_for(motion, config.problem.contact);
-  const State initial = standing_state(start, kStartHeight);
+  const BasicState<A> initial = standing_state<A>(start, kStartHeight);
   switch (config.mpc) {
     case MpcKind::kFine: {
-      const auto mpc = make_single_layer<kFineHorizon>(motion, initial, workers, config.problem, kFineStep);
+      const auto mpc = make_single_layer<kFineHorizon, A>(motion, initial, workers, config.problem, kFineStep);
       return simulate(*mpc, motion, config, initial, duration);
     }
     case MpcKind::kCoarse: {
-      const auto mpc = make_single_layer<kCoarseHorizon>(motion, initial, workers, config.problem, kCoarseStep);
+      const auto mpc = make_single_layer<kCoarseHorizon, A>(motion, initial, workers, config.problem, kCoarseStep);
       return simulate(*mpc, motion, config, initial, duration);
     }
     case MpcKind::kCoarseFast:
@@ -213,14 +221,15 @@ ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& conf
   }
 }
 
-ClosedLoopSummary summarise(const ClosedLoopRun& run) {
+template <int A>
+ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   ClosedLoopSummary s;
   if (run.samples.empty()) return s;
   std::vector<double> solve;
   solve.reserve(run.samples.size());
   s.min_height = s.max_height = run.samples.front().base.position.z();
   double iterations = 0.0;
-  for (const ClosedLoopSample& sample : run.samples) {
+  for (const BasicClosedLoopSample<A>& sample : run.samples) {
     solve.push_back(sample.solve_seconds * 1e3);
     iterations += sample.iterations;
     s.truncated += sample.truncated ? 1 : 0;
@@ -235,5 +244,10 @@ ClosedLoopSummary summarise(const ClosedLoopRun& run) {
   s.mean_iterations = iterations / static_cast<double>(run.samples.size());
   return s;
 }
+
+template ClosedLoopRun run_closed_loop<0>(const Motion&, const ClosedLoopConfig&);
+template ArmClosedLoopRun run_closed_loop<1>(const Motion&, const ClosedLoopConfig&);
+template ClosedLoopSummary summarise(const ClosedLoopRun&);
+template ClosedLoopSummary summarise(const ArmClosedLoopRun&);
 
 }  // namespace hmpc::humanoid

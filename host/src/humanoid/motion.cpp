@@ -27,6 +27,7 @@ const std::map<std::string, std::vector<KeySpec>>& section_keys() {
         {"w_alpha", 1}, {"w_beta", 1}, {"w_omega_x", 1}, {"w_omega_y", 1}, {"w_omega_z", 1},
         {"w_fast", 1}, {"w_fast_control", 1}, {"w_foot", 1}}},
       {"phase", {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}}},
+      {"reach", {{"target", 3}, {"start", 1}, {"w_reach", 1}, {"w_SFE", 1}}},
   };
   return keys;
 }
@@ -192,6 +193,7 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   Motion motion;
   const Section* motion_section = nullptr;
   const Section* weights_section = nullptr;
+  const Section* reach_section = nullptr;
   for (const Section& section : sections) {
     if (section.name == "phase") {
       if (motion.phase_count == kMaxPhases)
@@ -209,7 +211,9 @@ Motion parse_motion(std::istream& in, const std::string& source) {
       ++motion.phase_count;
       continue;
     }
-    const Section*& slot = section.name == "motion" ? motion_section : weights_section;
+    const Section*& slot = section.name == "motion"    ? motion_section
+                           : section.name == "weights" ? weights_section
+                                                       : reach_section;
     if (slot != nullptr) {
       reader.fail(section.line, "", "section [" + section.name + "] repeated (first on line " +
                                         std::to_string(slot->line) + ")");
@@ -263,6 +267,17 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   weights.fast = reader.weight(w, "w_fast");
   weights.fast_control = reader.weight(w, "w_fast_control");
   weights.foot = reader.weight(w, "w_foot");
+
+  if (reach_section != nullptr) {
+    const Section& r = *reach_section;
+    Reach& reach = motion.reach;
+    reach.active = true;
+    reach.target = reader.vector3(r, "target");
+    reach.start = reader.scalar(r, "start");
+    if (reach.start < 0.0) reader.fail(reader.line_of(r, "start"), "start", "must be >= 0");
+    reach.weight = reader.weight(r, "w_reach");
+    reach.control = reader.weight(r, "w_SFE");
+  }
   return motion;
 }
 

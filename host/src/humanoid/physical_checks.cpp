@@ -199,4 +199,30 @@ PhysicalCheck check_motion(const std::string& numeral, const Motion& motion, con
   return {false, "no physical check for motion '" + numeral + "'"};
 }
 
+ReachFigures reach_figures(const Motion& motion, const ArmClosedLoopRun& run) {
+  ReachFigures f;
+  for (const BasicClosedLoopSample<1>& s : run.samples) {
+    if (s.time < motion.reach.start) continue;
+    const double distance = (s.base.hand - motion.reach.target).norm();
+    const double after = s.time - motion.reach.start;
+    if (f.closest < 0.0 || distance < f.closest) {
+      f.closest = distance;
+      f.closest_after = after;
+    }
+    if (f.within_after < 0.0 && distance <= kReachTolerance) f.within_after = after;
+  }
+  return f;
+}
+
+PhysicalCheck check_reaching(const Motion& motion, const ArmClosedLoopRun& run) {
+  if (run.samples.empty()) return {false, "no samples"};
+  if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
+  const ReachFigures f = reach_figures(motion, run);
+  if (f.closest < 0.0) return {false, "the run ended before the reach started"};
+  const std::string closest =
+      format("hand closest to the target %.3f m, %.2f s after the reach started", f.closest, f.closest_after);
+  if (f.within_after < 0.0) return {false, closest + format(" (required <= %.2f m)", kReachTolerance)};
+  return {true, closest + format("; first within %.2f m after %.2f s", kReachTolerance, f.within_after)};
+}
+
 }  // namespace hmpc::humanoid

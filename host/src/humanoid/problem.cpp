@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "hmpc/solver/finite_difference.hpp"
 
@@ -15,9 +16,15 @@ double leg_angle(const Vector3& d, int axis) { return std::atan2(d[axis], -d.z()
 
 }  // namespace
 
-StateCost::StateCost(const Motion& motion, const State& initial, const ProblemConfig& config)
-    : motion_(motion), base_point_(config.base_point), dynamics_(Model(config.parameters)) {
-  const ContactModel contact(dynamics_.model(), config.parameters, config.contact);
+template <int A>
+BasicStateCost<A>::BasicStateCost(const Motion& motion, const State& initial, const ProblemConfig& config)
+    : motion_(motion), base_point_(config.base_point), dynamics_(BasicModel<A>(config.parameters)) {
+  if (motion.reach.active != (A == 1)) {
+    throw std::invalid_argument(motion.reach.active
+                                    ? "humanoid: a reaching motion needs the robot with an arm"
+                                    : "humanoid: the robot with an arm runs reaching motions only");
+  }
+  const BasicContactModel<A> contact(dynamics_.model(), config.parameters, config.contact);
   for (int leg = 0; leg < 2; ++leg) {
     // ContactModel's sole corners: per foot two heel corners, then two toe corners.
     const auto corner = [&](int k) { return contact.point(leg * kFootPoints + k).local; };
@@ -29,15 +36,17 @@ StateCost::StateCost(const Motion& motion, const State& initial, const ProblemCo
   beta_right_init_ = f.beta_right;
 }
 
-BaseFeatures StateCost::features(const State& x) const {
-  Kinematics kin;
+template <int A>
+BaseFeatures BasicStateCost<A>::features(const State& x) const {
+  using Model = BasicModel<A>;
+  BasicKinematics<A> kin;
   dynamics_.kinematics(x.q, x.v, kin);
   const Matrix3& R = kin.rotation[0];
   BaseFeatures f;
-  f.quaternion = x.q.segment<4>(3).normalized();
+  f.quaternion = x.q.template segment<4>(3).normalized();
   f.position = kin.position[0] + R * base_point_;
-  const Vector3 omega = x.v.head<3>();
-  f.velocity = R * (x.v.segment<3>(3) + omega.cross(base_point_));
+  const Vector3 omega = x.v.template head<3>();
+  f.velocity = R * (x.v.template segment<3>(3) + omega.cross(base_point_));
   f.angular_velocity = R * omega;
   const auto ankle = [&](int leg) {
     return Vector3(R.transpose() * (kin.position[Model::body_of(leg, kAnkle)] - f.position));
@@ -51,39 +60,52 @@ BaseFeatures StateCost::features(const State& x) const {
     const int foot = Model::body_of(k / 2, kAnkle);
     f.sole_height[k] = (kin.position[foot] + kin.rotation[foot] * sole_points_[k]).z();
   }
+  if constexpr (A == 1) {
+    const int arm = Dimensions<A>::kArmBody;
+    f.hand = kin.position[arm] + kin.rotation[arm] * dynamics_.model().hand;
+  }
   return f;
 }
 
-CostResidual StateCost::residual(const StateVector& x, double time) const {
-  const BaseFeatures f = features(to_state(x));
+template <int A>
+typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const StateVector& x,
+                                                                      double time) const {
+  const BaseFeatures f = features(to_state<A>(x));
   const Phase& target = motion_.phase_at(time);
   const CostWeights& w = motion_.weights;
   CostResidual r;
   // Eq. 4.25; W_attitude = diag(w_q1, w_q2, w_q3, w_q4) on (x, y, z; w).
   const Eigen::Vector4d dq = f.quaternion - attitude_quaternion(target.attitude);
-  r.segment<3>(0) = w.attitude.head<3>().cwiseSqrt().cwiseProduct(dq.tail<3>());
+  r.template segment<3>(0) = w.attitude.head<3>().cwiseSqrt().cwiseProduct(dq.tail<3>());
   r[3] = std::sqrt(w.attitude[3]) * dq[0];
   r[4] = std::sqrt(w.height) * (f.position.z() - target.height);                       // Eq. 4.26
-  r.segment<3>(5) = w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity);  // Eq. 4.27
+  r.template segment<3>(5) = w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity);  // Eq. 4.27
   r[8] = std::sqrt(w.alpha) * (f.alpha_right - f.alpha_left);                           // Eq. 4.28
   r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);                         // Eq. 4.29
   r[10] = std::sqrt(w.beta) * (f.beta_left - beta_left_init_);
-  r.segment<3>(11) = w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);   // Eq. 4.30
+  r.template segment<3>(11) = w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);   // Eq. 4.30
   for (int k = 0; k < 4; ++k) {  // foot heights, heel and toe of each sole (Gait, motion.hpp)
     r[14 + k] = std::sqrt(w.foot) * (f.sole_height[k] - motion_.gait.foot_height(time, k / 2));
+  }
+  if constexpr (A == 1) {  // Eq. 2.53, from the reach's start
+    const Reach& reach = motion_.reach;
+    const double weight = time >= reach.start ? reach.weight : 0.0;
+    r.template tail<3>() = std::sqrt(weight) * (f.hand - reach.target);
   }
   return r;
 }
 
-void StateCost::derivatives(const StateVector& x, double time, StateVector& lx,
-                            StateMatrix& lxx) const {
+template <int A>
+void BasicStateCost<A>::derivatives(const StateVector& x, double time, StateVector& lx,
+                                    StateMatrix& lxx) const {
+  constexpr int kStateSize = Dimensions<A>::kStateSize, kResiduals = kCostResiduals<A>;
   // J = dr/dx by central differences (finite_difference.hpp's) in the entries r depends on:
   // the base height, quaternion and joint angles, and the torso's velocities. The horizontal
   // base position (it cancels from the leg angles) and the joint rates do not enter, so their
   // columns are zero.
-  Eigen::Matrix<double, kCostResiduals, kStateSize> J = Eigen::Matrix<double, kCostResiduals, kStateSize>::Zero();
+  Eigen::Matrix<double, kResiduals, kStateSize> J = Eigen::Matrix<double, kResiduals, kStateSize>::Zero();
   StateVector xp = x;
-  for (int i = 2; i < kConfigurationSize + kBaseDofs; ++i) {
+  for (int i = 2; i < Dimensions<A>::kConfigurationSize + kBaseDofs; ++i) {
     const double h = detail::fd_step(x[i], 1.0 / 3.0);
     xp[i] = x[i] + h;
     const CostResidual plus = residual(xp, time);
@@ -97,14 +119,17 @@ void StateCost::derivatives(const StateVector& x, double time, StateVector& lx,
   lxx.noalias() = 2.0 * J.transpose() * J;
 }
 
-JointVector StateCost::control_weights() const {
+template <int A>
+BasicJointVector<A> BasicStateCost<A>::control_weights() const {
   JointVector w;
   for (int leg = 0; leg < 2; ++leg)
     for (int j = 0; j < kJointsPerLeg; ++j) w[leg * kJointsPerLeg + j] = motion_.weights.control[j];
+  if constexpr (A == 1) w[Dimensions<A>::kArmJoint] = motion_.reach.control;
   return w;
 }
 
-double StateCost::control_cost(const JointVector& tau) const {
+template <int A>
+double BasicStateCost<A>::control_cost(const JointVector& tau) const {
   return tau.cwiseAbs2().dot(control_weights());
 }
 
@@ -118,7 +143,10 @@ ContactParameters contact_for(const Motion& motion, ContactParameters contact) {
   return contact;
 }
 
-State standing_state(const ProblemConfig& config, double height) {
+namespace {
+
+// standing_state() of the biped.
+State biped_stance(const ProblemConfig& config, double height) {
   const Model model(config.parameters);
   const ContactModel contact(model, config.parameters, config.contact);
   const Dynamics dynamics(model);
@@ -191,5 +219,27 @@ State standing_state(const ProblemConfig& config, double height) {
   x.q[2] = -lowest - sink;
   return x;
 }
+
+}  // namespace
+
+template <int A>
+BasicState<A> standing_state(const ProblemConfig& config, double height) {
+  const State biped = biped_stance(config, height);
+  if constexpr (A == 0) {
+    return biped;
+  } else {
+    // The arm hangs: the biped's stance (model.hpp's arm is the biped's right arm on a joint).
+    BasicState<A> x;
+    x.q << biped.q, 0.0;
+    x.v << biped.v, 0.0;
+    return x;
+  }
+}
+
+template State standing_state<0>(const ProblemConfig&, double);
+template BasicState<1> standing_state<1>(const ProblemConfig&, double);
+
+template class BasicStateCost<0>;
+template class BasicStateCost<1>;
 
 }  // namespace hmpc::humanoid

@@ -14,7 +14,8 @@ const char* const kLegNames[2] = {"left", "right"};
 const char* const kJointNames[kJointsPerLeg] = {"hip_abduction", "hip_flexion", "knee", "ankle"};
 // trajectory.csv's columns (1-based, as gnuplot counts): 15 base columns, joints and torques,
 // then 9 more before target_height and target_vx.
-constexpr int kTargetHeightColumn = 15 + 2 * kJoints + 10;
+template <int A>
+constexpr int kTargetHeightColumn = 15 + 2 * Dimensions<A>::kJoints + 10;
 
 void write_point(std::ostream& out, const Vector3& p, const Vector3& centre) {
   out << p.x() - centre.x() << ' ' << p.y() - centre.y() << ' ' << p.z() << '\n';
@@ -40,6 +41,20 @@ void write_frame(std::ostream& out, const StickFigure& f, const Motion& motion) 
     write_point(out, Vector3(motion.seat_x_max, centre.y() + 0.25, motion.seat_height), centre);
     out << '\n';
   }
+  if (f.arm) {
+    write_point(out, f.spine, centre);
+    write_point(out, f.shoulder, centre);
+    write_point(out, f.hand, centre);
+    out << '\n';
+  }
+  if (motion.reach.active) {  // the target as a small cross in both views
+    const Vector3& p = motion.reach.target;
+    for (const Vector3& d : {Vector3(0.03, 0.03, 0.0), Vector3(0.0, 0.0, 0.03)}) {
+      write_point(out, p - d, centre);
+      write_point(out, p + d, centre);
+      out << '\n';
+    }
+  }
 }
 
 bool fail(std::string& error, const std::string& message) {
@@ -49,13 +64,15 @@ bool fail(std::string& error, const std::string& message) {
 
 }  // namespace
 
-StickFigure stick_figure(const State& x, const ProblemConfig& config) {
+template <int A>
+StickFigure stick_figure(const BasicState<A>& x, const ProblemConfig& config) {
+  using Model = BasicModel<A>;
   const Model model(config.parameters);
-  const Dynamics dynamics(model);
-  const ContactModel contact(model, config.parameters, config.contact);
-  Kinematics kin;
+  const BasicDynamics<A> dynamics(model);
+  const BasicContactModel<A> contact(model, config.parameters, config.contact);
+  BasicKinematics<A> kin;
   dynamics.kinematics(x.q, x.v, kin);
-  ContactState points;
+  BasicContactState<A> points;
   contact.evaluate(kin, x.v, points);
   StickFigure f;
   f.mid_hip = kin.position[0];
@@ -69,21 +86,35 @@ StickFigure stick_figure(const State& x, const ProblemConfig& config) {
     f.heel[leg] = 0.5 * (points.position[first] + points.position[first + 1]);
     f.toe[leg] = 0.5 * (points.position[first + 2] + points.position[first + 3]);
   }
+  if constexpr (A == 1) {
+    const int arm = Dimensions<A>::kArmBody;
+    f.arm = true;
+    const Vector3& shoulder = model.bodies[arm].joint_origin;  // torso coordinates
+    f.spine = kin.position[0] + kin.rotation[0] * Vector3(0.0, 0.0, shoulder.z());
+    f.shoulder = kin.position[arm];
+    f.hand = kin.position[arm] + kin.rotation[arm] * model.hand;
+  }
   return f;
 }
 
-void write_trajectory_csv(std::ostream& out, const Motion& motion, const ClosedLoopRun& run) {
+template <int A>
+void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicClosedLoopRun<A>& run) {
+  constexpr int kJoints = Dimensions<A>::kJoints;
   out << "time,base_x,base_y,base_z,base_vx,base_vy,base_vz,quat_w,quat_x,quat_y,quat_z,"
          "alpha_left,alpha_right,beta_left,beta_right";
   for (const char* leg : kLegNames)
     for (const char* joint : kJointNames) out << ',' << leg << '_' << joint;
+  if (A == 1) out << ",right_shoulder_flexion";
   for (const char* leg : kLegNames)
     for (const char* joint : kJointNames) out << ",torque_" << leg << '_' << joint;
+  if (A == 1) out << ",torque_right_shoulder_flexion";
   out << ",force_left,force_right,force_seat,solve_ms,iterations,fast_iterations,truncated,"
          "plan_usable,cost,target_height,target_vx,target_vy,target_vz,target_roll,target_pitch,"
-         "target_yaw\n";
+         "target_yaw";
+  if (A == 1) out << ",hand_x,hand_y,hand_z,reach_x,reach_y,reach_z";
+  out << '\n';
   out.precision(9);
-  for (const ClosedLoopSample& s : run.samples) {
+  for (const BasicClosedLoopSample<A>& s : run.samples) {
     const BaseFeatures& b = s.base;
     out << s.time << ',' << b.position.x() << ',' << b.position.y() << ',' << b.position.z() << ','
         << b.velocity.x() << ',' << b.velocity.y() << ',' << b.velocity.z() << ',' << b.quaternion[0]
@@ -97,12 +128,19 @@ void write_trajectory_csv(std::ostream& out, const Motion& motion, const ClosedL
         << (s.truncated ? 1 : 0) << ',' << (s.plan_usable ? 1 : 0) << ',' << s.cost << ','
         << target.height << ',' << target.velocity.x() << ',' << target.velocity.y() << ','
         << target.velocity.z() << ',' << target.attitude.x() << ',' << target.attitude.y() << ','
-        << target.attitude.z() << '\n';
+        << target.attitude.z();
+    if (A == 1) {
+      const Vector3& reach = motion.reach.target;
+      out << ',' << s.base.hand.x() << ',' << s.base.hand.y() << ',' << s.base.hand.z() << ','
+          << reach.x() << ',' << reach.y() << ',' << reach.z();
+    }
+    out << '\n';
   }
 }
 
+template <int A>
 bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
-               const ClosedLoopRun& run, int frames, std::string& error) {
+               const BasicClosedLoopRun<A>& run, int frames, std::string& error) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -122,9 +160,9 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
     std::ofstream dat(base / "filmstrip.dat");
     dat.precision(6);
     for (int i = 0; i < frames; ++i) {
-      const ClosedLoopSample& s = run.samples[(count - 1) * i / (frames - 1)];
+      const BasicClosedLoopSample<A>& s = run.samples[(count - 1) * i / (frames - 1)];
       const StickFigure f = stick_figure(s.state);
-      top = std::max({top, f.vertex.z(), f.toe[0].z(), f.toe[1].z()});
+      top = std::max({top, f.vertex.z(), f.toe[0].z(), f.toe[1].z(), f.hand.z()});
       dat << "# t = " << s.time << " s\n";
       write_frame(dat, f, motion);
       dat << "\n";
@@ -154,9 +192,9 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
        << "set xtics autofreq font ''\nset ytics autofreq font ''\nset key outside top center horizontal\n"
        << "set multiplot layout 2,1 title '" << title << "'\n"
        << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:4 with lines lw 2 title 'base point', "
-       << "'' using 1:" << kTargetHeightColumn << " with steps dt 2 title 'target'\n"
+       << "'' using 1:" << kTargetHeightColumn<A> << " with steps dt 2 title 'target'\n"
        << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:5 with lines lw 2 "
-       << "title 'base point', '' using 1:" << kTargetHeightColumn + 1 << " with steps dt 2 title 'target'\n"
+       << "title 'base point', '' using 1:" << kTargetHeightColumn<A> + 1 << " with steps dt 2 title 'target'\n"
        << "unset multiplot\n";
     if (!gp) return fail(error, "cannot write " + script.string());
   }
@@ -167,5 +205,14 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
   }
   return true;
 }
+
+template StickFigure stick_figure(const BasicState<0>&, const ProblemConfig&);
+template StickFigure stick_figure(const BasicState<1>&, const ProblemConfig&);
+template void write_trajectory_csv(std::ostream&, const Motion&, const BasicClosedLoopRun<0>&);
+template void write_trajectory_csv(std::ostream&, const Motion&, const BasicClosedLoopRun<1>&);
+template bool write_run(const std::string&, const std::string&, const Motion&,
+                        const BasicClosedLoopRun<0>&, int, std::string&);
+template bool write_run(const std::string&, const std::string&, const Motion&,
+                        const BasicClosedLoopRun<1>&, int, std::string&);
 
 }  // namespace hmpc::humanoid

@@ -46,12 +46,13 @@ struct ClosedLoopConfig {
   ProblemConfig problem{};
 };
 
-// One 30 ms sampling period.
-struct ClosedLoopSample {
+// One 30 ms sampling period, of the biped (A = 0) or the robot with an arm (A = 1).
+template <int A>
+struct BasicClosedLoopSample {
   double time = 0.0;      // [s], at the end of the period
-  State state;            // simulated, at the end of the period
+  BasicState<A> state;    // simulated, at the end of the period
   BaseFeatures base;      // of `state`
-  JointVector torque;     // the input applied during the period's first 10 ms [N m]
+  BasicJointVector<A> torque;  // the input applied during the period's first 10 ms [N m]
   // Vertical ground (and seat) force on each foot and on the seat points at the end of
   // the period [N] (left, right, seat).
   double left_force = 0.0, right_force = 0.0, seat_force = 0.0;
@@ -66,21 +67,28 @@ struct ClosedLoopSample {
   double cost = 0.0;
 };
 
-struct ClosedLoopRun {
-  std::vector<ClosedLoopSample> samples;
-  State initial;
+template <int A>
+struct BasicClosedLoopRun {
+  std::vector<BasicClosedLoopSample<A>> samples;
+  BasicState<A> initial;
   double fell_at = -1.0;  // [s] the sample where the run ended early (see fallen_height), or -1
   bool fell() const { return fell_at >= 0.0; }
 };
+using ClosedLoopSample = BasicClosedLoopSample<0>;
+using ClosedLoopRun = BasicClosedLoopRun<0>;
+using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 
 // Every motion starts standing quietly (standing_state) at motion I's height, Table 2.2: the
 // first phases of IV (0.65 m, sitting down) and VII-VIII (0 m, a crouch the legs cannot reach)
 // are targets to move towards, not poses to start in.
 constexpr double kStartHeight = 0.85;
 
-// Runs `motion` from standing_state at kStartHeight. Throws std::invalid_argument
-// for a negative or non-finite duration or threads outside 1..64.
-ClosedLoopRun run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
+// Runs `motion` from standing_state at kStartHeight, on the biped (A = 0) or, for a reaching
+// motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument for a
+// negative or non-finite duration, threads outside 1..64, or a motion that needs the other
+// robot.
+template <int A = 0>
+BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
 
 // Summary figures of a run.
 struct ClosedLoopSummary {
@@ -90,6 +98,7 @@ struct ClosedLoopSummary {
   double total_cost = 0.0;
   double min_height = 0.0, max_height = 0.0;
 };
-ClosedLoopSummary summarise(const ClosedLoopRun& run);
+template <int A>
+ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run);
 
 }  // namespace hmpc::humanoid

@@ -19,12 +19,21 @@ constexpr double kSamplingPeriod = 0.030;
 constexpr double kSimulatorStep = 0.001;
 constexpr int kIterationCap = 6;
 constexpr double kTolerance = 5e-2;
+// The reaching experiment's (Sec. 2.6.2: "The maximum number of iterations and the
+// termination criteria for iLQR was respectively 4 and 5.0 x 10^-1").
+constexpr int kReachingIterationCap = 4;
+constexpr double kReachingTolerance = 0.5;
+// Every layer's iLQR settings for `motion`: the reaching ones for a reaching motion.
+IlqrConfig<double> layer_solver(const Motion& motion);
 // Offline optimisation of the initial inputs (Sec. 2.3.4, Fig. 2.2). Our choice: from zero
 // torques the standing problem converges in under 10 iterations; 30 leaves a margin.
 constexpr int kOfflineIterations = 30;
 
-using CoarseFast = CoarseFastMpc<HumanoidProblem<kCoarseHorizon>, kCoarseHorizon,
-                                 FastSubsystem<kFastHorizon>, kFastHorizon>;
+// For the biped (A = 0) or the robot with an arm (A = 1).
+template <int A>
+using BasicCoarseFast = CoarseFastMpc<HumanoidProblem<kCoarseHorizon, A>, kCoarseHorizon,
+                                      FastSubsystem<kFastHorizon, A>, kFastHorizon>;
+using CoarseFast = BasicCoarseFast<0>;
 
 // The lower layer's reference is the upper plan with its states interpolated linearly between
 // the 30 ms nodes (TwoLayerMpc's StateHold::kLinear) rather than held as Eq. 2.35 says: the
@@ -36,7 +45,8 @@ using CoarseFast = CoarseFastMpc<HumanoidProblem<kCoarseHorizon>, kCoarseHorizon
 // Moving the held base with its own velocity instead (Eq. 2.51a) fell as well.
 // The MPC for `motion` from `initial` (`config`'s step is overridden per layer, its contact
 // gets the motion's chair). `pool` may be null (serial) and must outlive the MPC.
-std::unique_ptr<CoarseFast> make_coarse_fast(const Motion& motion, const State& initial,
-                                             ThreadPool* pool, ProblemConfig config = ProblemConfig{});
+template <int A>
+std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion, const BasicState<A>& initial,
+                                                     ThreadPool* pool, ProblemConfig config = ProblemConfig{});
 
 }  // namespace hmpc::humanoid

@@ -2,7 +2,8 @@
 // Eqs. 2.42-2.51; two_layer_mpc.hpp's FastSubsystem interface).
 //
 // Split (Eq. 2.47): slow y = the base, (q_base, v_base) = (position, quaternion; spatial
-// velocity), 13 numbers; fast z = the legs, (q_leg, v_leg), n_f = 16 (Sec. 2.6.2). The inertia
+// velocity), 13 numbers; fast z = the joints, (q_joints, v_joints): the legs', n_f = 16, and
+// for the robot with an arm the shoulder's too, n_f = 18 (Sec. 2.6.2). The inertia
 // matrix splits as M = M_base + M_leg (Eq. 2.42), M_base = [M11 0; 0 0] with M11 the base's
 // 6x6 block (linear and angular, the thesis's "latter assumption"), and
 // epsilon = ||M_leg|| / ||M_base|| (Eq. 2.43; Frobenius norms, the thesis names none).
@@ -29,28 +30,37 @@
 
 namespace hmpc::humanoid {
 
-constexpr int kFastStateSize = kJointStateSize;  // n_f = 16
+constexpr int kFastStateSize = kJointStateSize;  // n_f = 16, the biped's
 using FastState = Eigen::Matrix<double, kFastStateSize, 1>;
 
-// z of Eq. 2.47 from x = (q, v), and x with its z replaced.
-inline FastState fast_part(const StateVector& x) {
-  FastState z;
-  z << x.segment<kJoints>(7), x.tail<kJoints>();
+// z of Eq. 2.47 from x = (q, v) of either variant (n = 13 + 2 joints), and x with its z
+// replaced.
+template <class StateVector>
+Eigen::Matrix<double, StateVector::RowsAtCompileTime - 13, 1> fast_part(const StateVector& x) {
+  constexpr int joints = (StateVector::RowsAtCompileTime - 13) / 2;
+  Eigen::Matrix<double, 2 * joints, 1> z;
+  z << x.template segment<joints>(7), x.template tail<joints>();
   return z;
 }
-inline StateVector with_fast_part(StateVector x, const FastState& z) {
-  x.segment<kJoints>(7) = z.head<kJoints>();
-  x.tail<kJoints>() = z.tail<kJoints>();
+template <class StateVector, class Fast>
+StateVector with_fast_part(StateVector x, const Fast& z) {
+  constexpr int joints = Fast::RowsAtCompileTime / 2;
+  x.template segment<joints>(7) = z.template head<joints>();
+  x.template tail<joints>() = z.template tail<joints>();
   return x;
 }
 
 // epsilon = ||M_leg||_F / ||M_base||_F, Eqs. 2.42-2.43.
 double perturbation_parameter(const MassMatrix& M);
 
-template <int NFast>
+template <int NFast, int ArmJoints = 0>
 class FastSubsystem
-    : public ProblemBase<FastSubsystem<NFast>, double, kFastStateSize, kJoints> {
-  using Base = ProblemBase<FastSubsystem<NFast>, double, kFastStateSize, kJoints>;
+    : public ProblemBase<FastSubsystem<NFast, ArmJoints>, double, 2 * Dimensions<ArmJoints>::kJoints,
+                         Dimensions<ArmJoints>::kJoints> {
+  using Base = ProblemBase<FastSubsystem<NFast, ArmJoints>, double,
+                           2 * Dimensions<ArmJoints>::kJoints, Dimensions<ArmJoints>::kJoints>;
+  static constexpr int A = ArmJoints, kJoints = Dimensions<ArmJoints>::kJoints;
+  using StepMap = BasicStepMap<ArmJoints>;
 
  public:
   using typename Base::Control;
@@ -59,14 +69,14 @@ class FastSubsystem
   using typename Base::State;
   using typename Base::StateJacobian;
   using typename Base::TerminalDerivatives;
-  using FullState = StateVector;
-  using FullControl = JointVector;
+  using FullState = BasicStateVector<ArmJoints>;
+  using FullControl = BasicJointVector<ArmJoints>;
 
   // config.step is Delta t_f. `pool` (may be null: serial) must outlive the problem.
   FastSubsystem(const CostWeights& weights, const ProblemConfig& config,
                 ThreadPool* pool = nullptr)
       : weights_(weights), config_(config), pool_(pool) {
-    const Model model(config.parameters);
+    const BasicModel<ArmJoints> model(config.parameters);
     step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
     limit_ = model.torque_limit;
     // A valid reference (identity attitude, at rest) until the MPC sets the upper plan.
@@ -94,8 +104,8 @@ class FastSubsystem
 
   // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j.
   State dynamics(const State& zeta, const Control& nu, int j) const {
-    const humanoid::State next =
-        step_maps_[j].step_joints(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
+    const BasicState<ArmJoints> next =
+        step_maps_[j].step_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
     return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
   }
 
@@ -106,7 +116,7 @@ class FastSubsystem
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(zeta, nu, j, fz, fu);
     } else {
-      step_maps_[j].linearise_joints(to_state(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
+      step_maps_[j].linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
                                    fu);
     }
   }
@@ -144,7 +154,7 @@ class FastSubsystem
   CostWeights weights_;
   ProblemConfig config_;
   ThreadPool* pool_;
-  JointVector limit_;
+  FullControl limit_;
   std::array<FullState, NFast + 1> x_hat_;
   std::array<FullControl, NFast + 1> u_hat_;
   mutable std::array<StepMap, NFast> step_maps_;  // one workspace per step, as in problem.hpp

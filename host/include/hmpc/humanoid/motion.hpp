@@ -27,6 +27,12 @@
 //              attitude  roll phi, pitch theta, yaw xi [rad]
 //              height    p_z [m]
 //              velocity  v_x v_y v_z [m/s]
+//   [reach]    (optional, at most once) whole-body reaching, Eq. 2.53: the motion runs on the
+//              robot with a right arm (n = 31, model.hpp)
+//              target    p_reach, world [m]
+//              start     time the reaching term switches on [s] (>= 0)
+//              w_reach   Eq. 2.53's weight
+//              w_SFE     W_control of Eq. 4.24 for the shoulder joint
 // Every key is required exactly once per section; weights are finite and >= 0. Any error
 // throws MotionFileError naming the file, the line and the key.
 #pragma once
@@ -72,6 +78,16 @@ struct Gait {
   double foot_height(double t, int foot) const;
 };
 
+// Whole-body reaching (Sec. 2.6.1, Eq. 2.53): l_reach = w_reach |p_reach - p_hand|^2 from
+// `start` on, p_hand the hand's centre (Model::hand).
+struct Reach {
+  bool active = false;  // the motion file has a [reach] section
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();  // p_reach [m]
+  double start = 0.0;    // [s]
+  double weight = 0.0;   // w_reach
+  double control = 0.0;  // the shoulder torque's weight in W_control (Eq. 4.24)
+};
+
 struct Phase {
   double start = 0.0;                                   // [s]
   Eigen::Vector3d attitude = Eigen::Vector3d::Zero();   // roll, pitch, yaw [rad]
@@ -89,6 +105,7 @@ struct Motion {
   double seat_height = 0.0, seat_x_min = 0.0, seat_x_max = 0.0;  // [m], when `chair`
   Gait gait;  // period 0: none
   CostWeights weights;
+  Reach reach;  // not active: the biped's motions I-VIII
   std::array<Phase, kMaxPhases> phases{};
   int phase_count = 0;
 

@@ -15,7 +15,10 @@
 //         on the feet, base at 0.85 +- 0.05 m, torso tilt below 0.3 rad; VI also the yaw
 //         turned by pi +- 0.3 rad; VII's apex above V's (checked across runs by the caller);
 //   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
-//         full rotations), a flight phase, and an upright landing as for V-VII.
+//         full rotations), a flight phase, and an upright landing as for V-VII;
+//   reaching (Sec. 2.6.1, Eq. 2.53; the robot with an arm): the hand's centre within 5 cm of
+//         the target at a sample after the reach starts (the threshold: a hand's
+//         half-width, so the palm touches a ball there).
 // Every motion also must not have fallen (closed_loop.hpp's fallen_clearance).
 #pragma once
 
@@ -38,5 +41,18 @@ PhysicalCheck check_motion(const std::string& numeral, const Motion& motion, con
 
 // The highest base point of a run [m] (VII against V).
 double apex_height(const ClosedLoopRun& run);
+
+constexpr double kReachTolerance = 0.05;  // [m] hand to target, see above
+// How a reaching run (Motion::reach) went: the smallest hand-to-target distance at a sample
+// from the reach's start on, when it happened and when the hand first came within
+// kReachTolerance (both in seconds after the start; -1 if never): the latter is our analogue
+// of the thesis's reaching time (Sec. 2.6.3: 1.66 s from the start to the smallest distance).
+struct ReachFigures {
+  double closest = -1.0;       // [m]
+  double closest_after = -1.0;  // [s]
+  double within_after = -1.0;   // [s]
+};
+ReachFigures reach_figures(const Motion& motion, const ArmClosedLoopRun& run);
+PhysicalCheck check_reaching(const Motion& motion, const ArmClosedLoopRun& run);
 
 }  // namespace hmpc::humanoid

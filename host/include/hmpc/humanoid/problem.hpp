@@ -5,6 +5,7 @@
 //   l(x, u, t) = l_attitude + l_height + l_velocity + l_alpha + l_beta + l_omega   (4.25-4.30)
 //              + tau' W_control tau                                                 (4.24)
 //              + l_foot                     (ours: foot heights, motion.hpp's Gait)
+//              + l_reach                    (Eq. 2.53, the robot with an arm, n = 31)
 // with the targets of the motion phase in force at the step's time (Tables 2.2-2.3), and
 // l_T(x) the same state terms at the end of the horizon.
 //
@@ -48,15 +49,22 @@
 
 namespace hmpc::humanoid {
 
-using StateMatrix = Eigen::Matrix<double, kStateSize, kStateSize>;
+template <int A> using BasicStateVector = Eigen::Matrix<double, Dimensions<A>::kStateSize, 1>;
+template <int A>
+using BasicStateMatrix = Eigen::Matrix<double, Dimensions<A>::kStateSize, Dimensions<A>::kStateSize>;
+using StateMatrix = BasicStateMatrix<0>;
 
-inline StateVector to_vector(const State& x) {
-  StateVector out;
+template <int A>
+BasicStateVector<A> to_vector(const BasicState<A>& x) {
+  BasicStateVector<A> out;
   out << x.q, x.v;
   return out;
 }
-inline State to_state(const StateVector& x) {
-  return State{x.head<kConfigurationSize>(), x.tail<kDofs>()};
+// A: the variant (model.hpp), not deduced; the biped's by default.
+template <int A = 0>
+BasicState<A> to_state(const BasicStateVector<A>& x) {
+  return BasicState<A>{x.template head<Dimensions<A>::kConfigurationSize>(),
+                       x.template tail<Dimensions<A>::kDofs>()};
 }
 
 // How the problems linearise the step map (see the file comment).
@@ -92,19 +100,29 @@ struct BaseFeatures {
   // Heights above the ground of the soles' heel and toe edge centres [m]: left heel, left
   // toe, right heel, right toe (for the foot-height term; at the standing sink when standing).
   std::array<double, 4> sole_height{};
+  Vector3 hand = Vector3::Zero();  // the hand's centre, world (the robot with an arm)
 };
 
 // Square-root-weighted residuals: 4 attitude, 1 height, 3 velocity, 1 alpha, 2 beta (right,
-// left), 3 angular velocity, 4 foot heights (as BaseFeatures::sole_height; Gait in motion.hpp).
-constexpr int kCostResiduals = 18;
-using CostResidual = Eigen::Matrix<double, kCostResiduals, 1>;
+// left), 3 angular velocity, 4 foot heights (as BaseFeatures::sole_height; Gait in motion.hpp),
+// and for the robot with an arm 3 for the hand (Eq. 2.53).
+template <int A>
+constexpr int kCostResiduals = 18 + 3 * A;
 
 // The state cost of Sec. 4.3.1 for one motion. Immutable after construction; every function
 // is safe to call from several threads.
-class StateCost {
+template <int ArmJoints>
+class BasicStateCost {
  public:
-  // beta^init of Eq. 4.29 is taken from `initial`.
-  StateCost(const Motion& motion, const State& initial, const ProblemConfig& config);
+  using State = BasicState<ArmJoints>;
+  using StateVector = BasicStateVector<ArmJoints>;
+  using StateMatrix = BasicStateMatrix<ArmJoints>;
+  using JointVector = BasicJointVector<ArmJoints>;
+  using CostResidual = Eigen::Matrix<double, kCostResiduals<ArmJoints>, 1>;
+
+  // beta^init of Eq. 4.29 is taken from `initial`. Throws std::invalid_argument if the motion
+  // reaches (Motion::reach) and the robot has no arm, or the other way round.
+  BasicStateCost(const Motion& motion, const State& initial, const ProblemConfig& config);
 
   const Motion& motion() const { return motion_; }
   BaseFeatures features(const State& x) const;
@@ -121,12 +139,21 @@ class StateCost {
   Vector3 base_point_;
   std::array<Vector3, 4> sole_points_;  // heel and toe edge centres in foot coordinates, as sole_height
   double beta_left_init_ = 0.0, beta_right_init_ = 0.0;
-  Dynamics dynamics_;  // kinematics only (a const member function)
+  BasicDynamics<ArmJoints> dynamics_;  // kinematics only (a const member function)
 };
 
-template <int N>
-class HumanoidProblem : public ProblemBase<HumanoidProblem<N>, double, kStateSize, kJoints> {
-  using Base = ProblemBase<HumanoidProblem<N>, double, kStateSize, kJoints>;
+using StateCost = BasicStateCost<0>;
+
+// The problem of horizon N for the biped (ArmJoints 0) or the robot with an arm (1).
+template <int N, int ArmJoints = 0>
+class HumanoidProblem
+    : public ProblemBase<HumanoidProblem<N, ArmJoints>, double, Dimensions<ArmJoints>::kStateSize,
+                         Dimensions<ArmJoints>::kJoints> {
+  using Base = ProblemBase<HumanoidProblem<N, ArmJoints>, double, Dimensions<ArmJoints>::kStateSize,
+                           Dimensions<ArmJoints>::kJoints>;
+  using StepMap = BasicStepMap<ArmJoints>;
+  using JointVector = BasicJointVector<ArmJoints>;
+  static constexpr int A = ArmJoints;
 
  public:
   using typename Base::Control;
@@ -137,31 +164,31 @@ class HumanoidProblem : public ProblemBase<HumanoidProblem<N>, double, kStateSiz
   using typename Base::TerminalDerivatives;
 
   // `pool` (may be null: serial) must outlive the problem and its copies.
-  HumanoidProblem(const Motion& motion, const humanoid::State& initial,
+  HumanoidProblem(const Motion& motion, const BasicState<ArmJoints>& initial,
                   const ProblemConfig& config = ProblemConfig{}, ThreadPool* pool = nullptr)
       : config_(config), cost_(motion, initial, config), pool_(pool) {
-    const Model model(config.parameters);
+    const BasicModel<ArmJoints> model(config.parameters);
     step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
     upper_ = model.torque_limit;
     lower_ = -model.torque_limit;
   }
 
   const ProblemConfig& config() const { return config_; }
-  const StateCost& cost() const { return cost_; }
+  const BasicStateCost<ArmJoints>& cost() const { return cost_; }
   // Time of the horizon's first state in the motion's schedule [s].
   void set_start_time(double t) { start_time_ = t; }
   double start_time() const { return start_time_; }
   double time_of(int t) const { return start_time_ + t * config_.step; }
 
   State dynamics(const State& x, const Control& u, int t) const {
-    return to_vector(step_maps_[t].step(to_state(x), u, config_.step));
+    return to_vector(step_maps_[t].step(to_state<A>(x), u, config_.step));
   }
   void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
                             ControlJacobian& fu) const {
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(x, u, t, fx, fu);
     } else {
-      step_maps_[t].linearise(to_state(x), u, config_.step, fx, fu);
+      step_maps_[t].linearise(to_state<A>(x), u, config_.step, fx, fu);
     }
   }
   double running_cost(const State& x, const Control& u, int t) const {
@@ -195,7 +222,7 @@ class HumanoidProblem : public ProblemBase<HumanoidProblem<N>, double, kStateSiz
 
  private:
   ProblemConfig config_;
-  StateCost cost_;
+  BasicStateCost<ArmJoints> cost_;
   ThreadPool* pool_;
   double start_time_ = 0.0;
   Control lower_, upper_;
@@ -209,7 +236,8 @@ ContactParameters contact_for(const Motion& motion, ContactParameters contact = 
 // A quiet stance for motion starts: torso upright with its base point at `height`, feet flat
 // and side by side, knees bent as needed (straight if `height` is out of reach), the centre
 // of mass over the middle of the soles, the soles sunk by the static load's mean W / (8 k),
-// at rest.
-humanoid::State standing_state(const ProblemConfig& config, double height);
+// at rest; the arm, if any (A = 1), hanging (the same mass distribution as the biped's).
+template <int A = 0>
+BasicState<A> standing_state(const ProblemConfig& config, double height);
 
 }  // namespace hmpc::humanoid

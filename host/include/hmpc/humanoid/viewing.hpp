@@ -12,23 +12,32 @@
 
 namespace hmpc::humanoid {
 
-// The stick figure's points (world) at a state.
+// The stick figure's points (world) at a state; for the robot with an arm (A = 1) also the
+// spine at shoulder height, the shoulder and the hand.
 struct StickFigure {
   Vector3 vertex, mid_hip;
   std::array<Vector3, 2> hip, knee, ankle, heel, toe;  // left, right
+  bool arm = false;
+  Vector3 spine = Vector3::Zero(), shoulder = Vector3::Zero(), hand = Vector3::Zero();
 };
-StickFigure stick_figure(const State& x, const ProblemConfig& config = ProblemConfig{});
+template <int A>
+StickFigure stick_figure(const BasicState<A>& x, const ProblemConfig& config = ProblemConfig{});
 
 // One row per 30 ms sample (header line first; columns named there): time, base point
 // position and velocity, torso quaternion, leg angles, joint angles, applied torques, foot and
-// seat forces, solve time, iterations, truncation, period cost, and the phase targets.
-void write_trajectory_csv(std::ostream& out, const Motion& motion, const ClosedLoopRun& run);
+// seat forces, solve time, iterations, truncation, period cost, and the phase targets; for the
+// robot with an arm its joint and torque after the legs', and at the end the hand's position
+// and the reach target.
+template <int A>
+void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicClosedLoopRun<A>& run);
 
 // Writes DIR/trajectory.csv, DIR/filmstrip.dat, DIR/humanoid.gp and runs gnuplot for
 // DIR/filmstrip.png (`frames` evenly spaced samples, 2..16) and DIR/base.png. `title` heads
 // the pictures. Returns false (with the reason in `error`) if a file cannot be written or
 // gnuplot fails; the CSV is written first, so it survives a plotting failure.
+// A reaching motion's filmstrip also shows the arm and the target.
+template <int A>
 bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
-               const ClosedLoopRun& run, int frames, std::string& error);
+               const BasicClosedLoopRun<A>& run, int frames, std::string& error);
 
 }  // namespace hmpc::humanoid
