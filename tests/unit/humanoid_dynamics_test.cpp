@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <tuple>
 #include <type_traits>
 
 #include "hmpc/humanoid/dynamics.hpp"
@@ -69,17 +70,22 @@ BasicModel<A> rigid_model() {
   return BasicModel<A>(hmpc::hil::BasicSimbodyHumanoid<A>::rigid_parameters());
 }
 
-// Both variants: the biped (n = 29) and the reaching robot with its arm (n = 31).
+// Both variants: the biped (n = 29) and the reaching robot with its arm (n = 31), each with
+// its rigid model, our dynamics and the Simbody twin.
 template <class Arm>
-class HumanoidVariants : public ::testing::Test {};
+class HumanoidVariants : public ::testing::Test {
+ protected:
+  static constexpr int A = Arm::value;
+  const BasicModel<A> model = rigid_model<A>();
+  BasicDynamics<A> dynamics{model};
+  hmpc::hil::BasicSimbodyHumanoid<A> simbody{model};
+};
 using Variants = ::testing::Types<std::integral_constant<int, 0>, std::integral_constant<int, 1>>;
 TYPED_TEST_SUITE(HumanoidVariants, Variants);
 
 TYPED_TEST(HumanoidVariants, AgreesWithSimbody) {
   constexpr int A = TypeParam::value;
-  const BasicModel<A> model = rigid_model<A>();
-  BasicDynamics<A> dynamics(model);
-  hmpc::hil::BasicSimbodyHumanoid<A> simbody(model);
+  auto [model, dynamics, simbody] = std::tie(this->model, this->dynamics, this->simbody);
   std::mt19937 rng(5);
   double worst_mass = 0.0, worst_bias = 0.0, worst_acceleration = 0.0;
   for (int n = 0; n < kRandomStates; ++n) {
@@ -103,9 +109,7 @@ TYPED_TEST(HumanoidVariants, AgreesWithSimbody) {
 // velocities from forward kinematics, and against Simbody's kinetic energy.
 TYPED_TEST(HumanoidVariants, KineticEnergyMatchesLinkEnergies) {
   constexpr int A = TypeParam::value;
-  const BasicModel<A> model = rigid_model<A>();
-  BasicDynamics<A> dynamics(model);
-  hmpc::hil::BasicSimbodyHumanoid<A> simbody(model);
+  auto [model, dynamics, simbody] = std::tie(this->model, this->dynamics, this->simbody);
   BasicKinematics<A> kinematics;
   std::mt19937 rng(7);
   for (int n = 0; n < kRandomStates; ++n) {
