@@ -7,6 +7,8 @@
 #include <fstream>
 #include <ostream>
 
+#include "hmpc/humanoid/physical_checks.hpp"
+
 namespace hmpc::humanoid {
 namespace {
 
@@ -187,13 +189,22 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
        << "do for [i=0:" << frames - 1 << "] { set title word(times, i+1).' s'; "
        << "plot 'filmstrip.dat' index i using 2:3 with lines lw 2 lc rgb '#99321f', 0 lc rgb 'gray' }\n"
        << "unset multiplot\n"
-       << "set terminal pngcairo size 900,640 noenhanced\nset output 'base.png'\n"
+       << "set terminal pngcairo size 900," << (A == 1 ? 900 : 640) << " noenhanced\nset output 'base.png'\n"
        << "set datafile separator ','\nset size noratio\nset autoscale\nunset title\n"
        << "set xtics autofreq font ''\nset ytics autofreq font ''\nset key outside top center horizontal\n"
-       << "set multiplot layout 2,1 title '" << title << "'\n"
+       << "set multiplot layout " << (A == 1 ? 3 : 2) << ",1 title '" << title << "'\n"
        << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:4 with lines lw 2 title 'base point', "
-       << "'' using 1:" << kTargetHeightColumn<A> << " with steps dt 2 title 'target'\n"
-       << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:5 with lines lw 2 "
+       << "'' using 1:" << kTargetHeightColumn<A> << " with steps dt 2 title 'target'\n";
+    if (A == 1) {
+      // The hand's distance to the reach target, from the columns after target_yaw.
+      const int hand = kTargetHeightColumn<A> + 7, reach = hand + 3;
+      gp << "set ylabel 'hand to target [m]'\nplot 'trajectory.csv' using 1:(sqrt(";
+      for (int k = 0; k < 3; ++k) {
+        gp << (k == 0 ? "" : "+") << "(column(" << hand + k << ")-column(" << reach + k << "))**2";
+      }
+      gp << ")) with lines lw 2 title 'hand', " << kReachTolerance << " dt 2 title '5 cm'\n";
+    }
+    gp << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:5 with lines lw 2 "
        << "title 'base point', '' using 1:" << kTargetHeightColumn<A> + 1 << " with steps dt 2 title 'target'\n"
        << "unset multiplot\n";
     if (!gp) return fail(error, "cannot write " + script.string());

@@ -35,7 +35,8 @@ void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicCl
 // DIR/filmstrip.png (`frames` evenly spaced samples, 2..16) and DIR/base.png. `title` heads
 // the pictures. Returns false (with the reason in `error`) if a file cannot be written or
 // gnuplot fails; the CSV is written first, so it survives a plotting failure.
-// A reaching motion's filmstrip also shows the arm and the target.
+// A reaching motion's filmstrip also shows the arm and the target, and base.png the hand's
+// distance to the target.
 template <int A>
 bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
                const BasicClosedLoopRun<A>& run, int frames, std::string& error);
