@@ -60,10 +60,7 @@ BaseFeatures BasicStateCost<A>::features(const State& x) const {
     const int foot = Model::body_of(k / 2, kAnkle);
     f.sole_height[k] = (kin.position[foot] + kin.rotation[foot] * sole_points_[k]).z();
   }
-  if constexpr (A == 1) {
-    const int arm = Dimensions<A>::kArmBody;
-    f.hand = kin.position[arm] + kin.rotation[arm] * dynamics_.model().hand;
-  }
+  if constexpr (A == 1) f.hand = hand_position(dynamics_.model(), kin);
   return f;
 }
 

@@ -94,7 +94,7 @@ StickFigure stick_figure(const BasicState<A>& x, const ProblemConfig& config) {
     const Vector3& shoulder = model.bodies[arm].joint_origin;  // torso coordinates
     f.spine = kin.position[0] + kin.rotation[0] * Vector3(0.0, 0.0, shoulder.z());
     f.shoulder = kin.position[arm];
-    f.hand = kin.position[arm] + kin.rotation[arm] * model.hand;
+    f.hand = hand_position(model, kin);
   }
   return f;
 }

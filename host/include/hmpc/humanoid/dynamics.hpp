@@ -87,6 +87,12 @@ class BasicDynamics {
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
 };
 
+// The hand's centre (Eq. 2.53's p_hand, ArmModel::hand) in world coordinates.
+inline Vector3 hand_position(const BasicModel<1>& model, const BasicKinematics<1>& kinematics) {
+  constexpr int arm = Dimensions<1>::kArmBody;
+  return kinematics.position[arm] + kinematics.rotation[arm] * model.hand;
+}
+
 using Kinematics = BasicKinematics<0>;
 using Dynamics = BasicDynamics<0>;
 using ArmDynamics = BasicDynamics<1>;
