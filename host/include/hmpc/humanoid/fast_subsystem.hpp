@@ -11,10 +11,11 @@
 // With the slow variables frozen (Eq. 2.50a, and Eq. 2.28: y constant on the fast time
 // scale) the deviation zeta = z - z_hat* of Eq. 2.48 obeys Eq. 2.50b,
 //   epsilon Q22 zeta_v' = p_z,   epsilon Q22 = M22 (Q = M_leg / epsilon, Eq. 2.43),
-// p_z the leg rows of the thesis's c + u (Eq. 2.49): joint torques, minus our bias forces,
-// plus the contact forces. epsilon cancels, so the step is StepMap::step_joints: the leg rows
-// of the model with the base held, discretised like the full model (Eq. 2.51c with the step
-// map's sub-steps in place of one Euler step; z_hat* is piecewise constant, so zeta_v' = v_leg').
+// p_z the joint rows of the thesis's c + u (Eq. 2.49): joint torques, minus our bias forces,
+// plus the contact forces. epsilon cancels, so the step is StepMap::step_joints: the joint
+// rows of the model with the base held, discretised like the full model (Eq. 2.51c with the
+// step map's sub-steps in place of one Euler step; z_hat* is piecewise constant, so
+// zeta_v' = v_z').
 //
 // As in the two-layer MPC's contract, the reference (y_hat*, z_hat*, u_hat*) is the upper
 // plan held on the fine grid (Eq. 2.35); zeta is re-referenced where z_hat* steps, so the
@@ -29,9 +30,6 @@
 #include "hmpc/humanoid/problem.hpp"
 
 namespace hmpc::humanoid {
-
-constexpr int kFastStateSize = kJointStateSize;  // n_f = 16, the biped's
-using FastState = Eigen::Matrix<double, kFastStateSize, 1>;
 
 // z of Eq. 2.47 from x = (q, v) of either variant (n = 13 + 2 joints), and x with its z
 // replaced.
