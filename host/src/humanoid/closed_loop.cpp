@@ -114,6 +114,16 @@ void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point s
   mpc.update(to_vector(x), upper, fast);
 }
 
+// Adds `weight` times the vertical contact forces of `contact` to the sample's left foot,
+// right foot and seat.
+template <int A>
+void add_vertical_forces(const BasicContactState<A>& contact, double weight, BasicClosedLoopSample<A>& sample) {
+  for (int i = 0; i < contact.count; ++i) {
+    const double fz = weight * contact.force[i].z();
+    (i < kFootPoints ? sample.left_force : i < kSolePoints ? sample.right_force : sample.seat_force) += fz;
+  }
+}
+
 template <class Mpc, int A>
 BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
                                const BasicState<A>& initial, double duration) {
@@ -149,6 +159,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
         sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
                        (kSimulatorStep / kCoarseStep);
         x = simulator.step(x, u, kSimulatorStep);
+        add_vertical_forces(simulator.contact_state(), 1.0 / (kFineSteps * kSimulatorSteps), sample);
       }
     }
     sample.time = t0 + kSamplingPeriod;
@@ -156,14 +167,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
     sample.iterations = iterations_of(mpc);
     sample.fast_iterations = fast_iterations_of(mpc);
     sample.plan_usable = mpc.last_plan_usable();
-    if (finite(x)) {
-      sample.base = observer.features(x);
-      const BasicContactState<A>& contact = simulator.evaluate_contact(x);
-      for (int i = 0; i < contact.count; ++i) {
-        const double fz = contact.force[i].z();
-        (i < kFootPoints ? sample.left_force : i < kSolePoints ? sample.right_force : sample.seat_force) += fz;
-      }
-    }
+    if (finite(x)) sample.base = observer.features(x);
     run.samples.push_back(sample);
     if (!finite(x) || lowest_non_foot_point(body, x) < config.fallen_clearance) {
       run.fell_at = sample.time;

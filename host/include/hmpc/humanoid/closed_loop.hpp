@@ -53,8 +53,10 @@ struct BasicClosedLoopSample {
   BasicState<A> state;    // simulated, at the end of the period
   BaseFeatures base;      // of `state`
   BasicJointVector<A> torque;  // the input applied during the period's first 10 ms [N m]
-  // Vertical ground (and seat) force on each foot and on the seat points at the end of
-  // the period [N] (left, right, seat).
+  // Vertical ground (and seat) force on each foot and on the seat points [N] (left, right,
+  // seat), averaged over the period's 1 ms simulator steps (each step's force at its start):
+  // what a load cell read at 33 Hz behind an anti-aliasing filter gives. A sample at one
+  // instant instead catches the contact's millisecond bounces within a stance as lift-offs.
   double left_force = 0.0, right_force = 0.0, seat_force = 0.0;
   double solve_seconds = 0.0;  // wall clock of the MPC update that started the period
   int iterations = 0;          // the (upper) layer's
