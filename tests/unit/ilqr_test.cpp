@@ -2,6 +2,8 @@
 // nonlinear swing-up, box limits, warm start, iteration budgets and bad input.
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -249,6 +251,68 @@ TEST(IlqrPendulum, SwingUpConvergesWithinTorqueLimit) {
   Pendulum::State x(0.0, 0.0);
   for (int t = 0; t < 100; ++t) x = problem.dynamics(x, solver.controls()[t], t);
   EXPECT_LT((x - xN).norm(), 1e-12);
+}
+
+// The pendulum with line-search lanes (hmpc/solver/problem.hpp): up to three rollouts per
+// round, run here in reverse order, as a thread pool may finish them in any order.
+class LanedPendulum : public hmpc::ProblemBase<LanedPendulum, double, 2, 1> {
+ public:
+  static constexpr int kRolloutLanes = 3;
+  int lanes = kRolloutLanes;
+  mutable std::array<int, kRolloutLanes> lane_steps{};  // rollout_dynamics calls per lane
+
+  int rollout_lanes() const { return lanes; }
+  State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
+    ++lane_steps[lane];
+    return pendulum.dynamics(x, u, t);
+  }
+  template <class LaneFunction>
+  void for_each_rollout(int count, const LaneFunction& rollout) const {
+    for (int lane = count - 1; lane >= 0; --lane) rollout(lane);
+  }
+  State dynamics(const State& x, const Control& u, int t) const { return pendulum.dynamics(x, u, t); }
+  void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
+                            ControlJacobian& fu) const {
+    pendulum.dynamics_derivatives(x, u, t, fx, fu);
+  }
+  double running_cost(const State& x, const Control& u, int t) const { return pendulum.running_cost(x, u, t); }
+  double terminal_cost(const State& x, int t) const { return pendulum.terminal_cost(x, t); }
+  Control control_lower_bound(int t) const { return pendulum.control_lower_bound(t); }
+  Control control_upper_bound(int t) const { return pendulum.control_upper_bound(t); }
+
+ private:
+  Pendulum pendulum;
+};
+
+TEST(IlqrLineSearch, LanesTakeTheSameStepsAsOneAtATime) {
+  hmpc::IlqrConfig<double> config;
+  config.max_iterations = 300;
+  config.tolerance = 1e-8;
+  Pendulum serial_problem;
+  hmpc::Ilqr<Pendulum, 100> serial(config);
+  const auto reference = serial.solve(serial_problem, Pendulum::State(0.0, 0.0));
+  ASSERT_EQ(reference.status, hmpc::SolveStatus::kConverged);
+  for (int lanes : {1, 2, 3}) {
+    LanedPendulum problem;
+    problem.lanes = lanes;
+    hmpc::Ilqr<LanedPendulum, 100> solver(config);
+    const auto result = solver.solve(problem, LanedPendulum::State(0.0, 0.0));
+    EXPECT_EQ(result.status, reference.status) << lanes << " lanes";
+    EXPECT_EQ(result.iterations, reference.iterations) << lanes << " lanes";
+    EXPECT_EQ(result.cost, reference.cost) << lanes << " lanes";
+    for (int t = 0; t < 100; ++t) ASSERT_EQ(solver.controls()[t], serial.controls()[t]) << lanes << " lanes, step " << t;
+    // Every lane asked for rolled out (the swing-up backtracks), none beyond.
+    for (int lane = 0; lane < LanedPendulum::kRolloutLanes; ++lane) {
+      if (lane < lanes) {
+        EXPECT_GT(problem.lane_steps[lane], 0) << lanes << " lanes, lane " << lane;
+      } else {
+        EXPECT_EQ(problem.lane_steps[lane], 0) << lanes << " lanes, lane " << lane;
+      }
+    }
+    // More rollouts in all (a round's later lanes are wasted when an earlier one is accepted).
+    if (lanes == 1) EXPECT_EQ(result.work.rollout_steps, reference.work.rollout_steps);
+    if (lanes > 1) EXPECT_GT(result.work.rollout_steps, reference.work.rollout_steps);
+  }
 }
 
 TEST(IlqrBudget, IterationBudgetIsHonouredAndPlanImproves) {

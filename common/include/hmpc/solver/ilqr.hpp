@@ -127,6 +127,9 @@ class Ilqr {
   static constexpr int kStateDim = Problem::kStateDim;
   static constexpr int kControlDim = Problem::kControlDim;
   static constexpr int kHorizon = N;
+  // Most line-search rollouts the problem may run at once (problem.hpp's for_each_rollout).
+  static constexpr int kLanes = Problem::kRolloutLanes;
+  static_assert(kLanes >= 1, "a problem has at least one rollout lane");
   using State = Eigen::Matrix<Scalar, kStateDim, 1>;
   using Control = Eigen::Matrix<Scalar, kControlDim, 1>;
   using Gain = Eigen::Matrix<Scalar, kControlDim, kStateDim>;
@@ -206,9 +209,11 @@ class Ilqr {
 
     // Eqs. 2.18-2.20 with alpha = 0 and no feedback: roll the warm start out from x0.
     Scalar cost = rollout_open_loop(problem, x0);
+    work_.rollout_steps += lane_steps_[0];
     if (!std::isfinite(cost)) {  // garbage warm start: fall back to the safe zero sequence
       set_zero_controls();
       cost = rollout_open_loop(problem, x0);
+      work_.rollout_steps += lane_steps_[0];
     }
     if (!std::isfinite(cost)) {
       result.status = SolveStatus::kNumericalFailure;
@@ -270,22 +275,34 @@ class Ilqr {
         break;
       }
 
-      // Forward pass with backtracking line search (Eqs. 2.18-2.20 with u + alpha k + K dx).
+      // Forward pass with backtracking line search (Eqs. 2.18-2.20 with u + alpha k + K dx):
+      // the first alpha of the sequence whose reduction is accepted. The problem may roll out
+      // several alphas at once (its lanes); they are judged in sequence order, so the step
+      // taken is the same as one at a time.
+      const int requested = problem.rollout_lanes();
+      const int lanes = requested < 1 ? 1 : (requested > kLanes ? kLanes : requested);
       bool accepted = false;
       Scalar reduction = 0;
-      for (int i = 0; i < config_.line_search_steps; ++i) {
-        const Scalar alpha = line_search_alpha(i);
-        const Scalar candidate_cost = rollout_closed_loop(problem, x0, alpha);
-        if (!std::isfinite(candidate_cost)) continue;
-        reduction = cost_ - candidate_cost;
-        const Scalar expected = -alpha * (expected_linear + alpha * expected_quadratic);
-        const Scalar ratio = expected > Scalar(0) ? reduction / expected
-                                                  : (reduction > Scalar(0) ? Scalar(1)
-                                                                           : Scalar(-1));
-        if (ratio > config_.min_reduction_ratio && reduction > Scalar(0)) {
-          commit_candidate(candidate_cost);
-          accepted = true;
-          break;
+      for (int first = 0; first < config_.line_search_steps && !accepted; first += lanes) {
+        const int count = config_.line_search_steps - first < lanes
+                              ? config_.line_search_steps - first : lanes;
+        problem.for_each_rollout(count, [&](int lane) {
+          lane_cost_[lane] = rollout_closed_loop(problem, x0, line_search_alpha(first + lane), lane);
+        });
+        for (int lane = 0; lane < count; ++lane) work_.rollout_steps += lane_steps_[lane];
+        for (int lane = 0; lane < count; ++lane) {
+          const Scalar alpha = line_search_alpha(first + lane);
+          if (!std::isfinite(lane_cost_[lane])) continue;
+          reduction = cost_ - lane_cost_[lane];
+          const Scalar expected = -alpha * (expected_linear + alpha * expected_quadratic);
+          const Scalar ratio = expected > Scalar(0) ? reduction / expected
+                                                    : (reduction > Scalar(0) ? Scalar(1)
+                                                                             : Scalar(-1));
+          if (ratio > config_.min_reduction_ratio && reduction > Scalar(0)) {
+            commit_candidate(lane_cost_[lane], lane);
+            accepted = true;
+            break;
+          }
         }
       }
 
@@ -329,39 +346,49 @@ class Ilqr {
     return pow(Scalar(10), Scalar(-3) * Scalar(i) / Scalar(config_.line_search_steps - 1));
   }
 
-  // Trajectory cost, Eq. 2.2; +inf if any state or cost term is not finite.
-  Scalar candidate_cost(const Problem& problem) {
-    work_.rollout_steps += N;
+  // Trajectory cost of lane `lane`'s candidate, Eq. 2.2; +inf if any state or cost term is
+  // not finite. Counts the work in lane_steps_ (lanes may run concurrently).
+  Scalar candidate_cost(const Problem& problem, int lane) {
+    const StateTrajectory& x = x_new_[lane];
+    const ControlTrajectory& u = u_new_[lane];
+    lane_steps_[lane] = N;
     Scalar cost = 0;
-    for (int t = 0; t < N; ++t) cost += problem.running_cost(x_new_[t], u_new_[t], t);
-    cost += problem.terminal_cost(x_new_[N], N);
+    for (int t = 0; t < N; ++t) cost += problem.running_cost(x[t], u[t], t);
+    cost += problem.terminal_cost(x[N], N);
     return std::isfinite(cost) ? cost : std::numeric_limits<Scalar>::infinity();
   }
 
   Scalar rollout_open_loop(const Problem& problem, const State& x0) {
-    x_new_[0] = x0;
+    StateTrajectory& x = x_new_[0];
+    ControlTrajectory& u = u_new_[0];
+    lane_steps_[0] = 0;
+    x[0] = x0;
     for (int t = 0; t < N; ++t) {
-      u_new_[t] = clamp(u_[t], t);
-      x_new_[t + 1] = problem.dynamics(x_new_[t], u_new_[t], t);
-      if (!x_new_[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
+      u[t] = clamp(u_[t], t);
+      x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, 0);
+      if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
     }
-    return candidate_cost(problem);
+    return candidate_cost(problem, 0);
   }
 
-  // Eq. 2.18-2.20 with the line-search step alpha on the feedforward term k_t of Eq. 2.12.
-  Scalar rollout_closed_loop(const Problem& problem, const State& x0, Scalar alpha) {
-    x_new_[0] = x0;
+  // Eq. 2.18-2.20 with the line-search step alpha on the feedforward term k_t of Eq. 2.12,
+  // into lane `lane`'s candidate.
+  Scalar rollout_closed_loop(const Problem& problem, const State& x0, Scalar alpha, int lane) {
+    StateTrajectory& x = x_new_[lane];
+    ControlTrajectory& u = u_new_[lane];
+    lane_steps_[lane] = 0;
+    x[0] = x0;
     for (int t = 0; t < N; ++t) {
-      u_new_[t] = clamp(u_[t] + alpha * k_[t] + K_[t] * (x_new_[t] - x_[t]), t);
-      x_new_[t + 1] = problem.dynamics(x_new_[t], u_new_[t], t);
-      if (!x_new_[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
+      u[t] = clamp(u_[t] + alpha * k_[t] + K_[t] * (x[t] - x_[t]), t);
+      x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, lane);
+      if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
     }
-    return candidate_cost(problem);
+    return candidate_cost(problem, lane);
   }
 
-  void commit_candidate(Scalar cost) {
-    x_ = x_new_;
-    u_ = u_new_;
+  void commit_candidate(Scalar cost, int lane = 0) {
+    x_ = x_new_[lane];
+    u_ = u_new_[lane];
     cost_ = cost;
   }
 
@@ -466,8 +493,11 @@ class Ilqr {
 
   StateTrajectory x_;       // nominal (best so far)
   ControlTrajectory u_;
-  StateTrajectory x_new_;   // line-search candidate
-  ControlTrajectory u_new_;
+  // Line-search candidates, one per rollout lane (Problem::kRolloutLanes).
+  std::array<StateTrajectory, kLanes> x_new_;
+  std::array<ControlTrajectory, kLanes> u_new_;
+  std::array<Scalar, kLanes> lane_cost_{};
+  std::array<std::int32_t, kLanes> lane_steps_{};  // rollout steps each lane completed
   std::array<Control, N> k_;  // feedforward, Eq. 2.12
   GainTrajectory K_;          // feedback, Eq. 2.12
   std::array<StateJacobian, N> fx_;

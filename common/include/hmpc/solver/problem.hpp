@@ -12,6 +12,13 @@
 //   run; default: in order on the calling thread. A host problem may spread them over
 //   threads: each call linearize(t) writes only step t's outputs, and the problem's
 //   derivative functions must then be safe to call concurrently for different t).
+//   kRolloutLanes, rollout_lanes(), rollout_dynamics(x, u, t, lane) and
+//   for_each_rollout(count, rollout) (how many line-search rollouts may run at once: at
+//   most kRolloutLanes, which sizes the solver's candidate buffers, and rollout_lanes() now;
+//   and where; default: one lane, dynamics(), on the calling thread. A host problem with
+//   several lanes gives each lane its own workspace, so that rollout_dynamics for different
+//   lanes and the cost functions may run concurrently; rollout_dynamics must return exactly
+//   what dynamics() does).
 // The defaults differentiate numerically, so a model supplies either analytic or
 // finite-difference derivatives simply by defining a function or not.
 #pragma once
@@ -91,6 +98,16 @@ class ProblemBase {
   template <class StepFunction>
   void for_each_step(int count, const StepFunction& linearize) const {
     for (int t = 0; t < count; ++t) linearize(t);
+  }
+
+  static constexpr int kRolloutLanes = 1;
+  int rollout_lanes() const { return 1; }
+  State rollout_dynamics(const State& x, const Control& u, int t, int /*lane*/) const {
+    return derived().dynamics(x, u, t);
+  }
+  template <class LaneFunction>
+  void for_each_rollout(int count, const LaneFunction& rollout) const {
+    for (int lane = 0; lane < count; ++lane) rollout(lane);
   }
 
   Control control_lower_bound(int) const {

@@ -76,6 +76,7 @@ class FastSubsystem
       : weights_(weights), config_(config), pool_(pool) {
     const BasicModel<ArmJoints> model(config.parameters);
     step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
+    lane_map_ = step_maps_[0];
     limit_ = model.torque_limit;
     // A valid reference (identity attitude, at rest) until the MPC sets the upper plan.
     for (auto& x : x_hat_) {
@@ -102,9 +103,7 @@ class FastSubsystem
 
   // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j.
   State dynamics(const State& zeta, const Control& nu, int j) const {
-    const BasicState<ArmJoints> next =
-        step_maps_[j].step_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
-    return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
+    return dynamics_in(step_maps_[j], zeta, nu, j);
   }
 
   // fz = dzeta_{j+1} / dzeta_j = dz+ / dz (z_hat is fixed), from the step map's
@@ -138,17 +137,32 @@ class FastSubsystem
 
   template <class StepFunction>
   void for_each_step(int count, const StepFunction& linearize) const {
-    if (pool_ != nullptr) {
-      pool_->for_each(count, linearize);
-    } else {
-      Base::for_each_step(count, linearize);
-    }
+    run_on(pool_, count, linearize);
+  }
+
+  // Line-search lanes (hmpc/solver/problem.hpp): lane 0 steps in step t's workspace, as
+  // dynamics() does, lane 1 in its own; a step depends on its arguments only, so both give
+  // dynamics()'s value.
+  static constexpr int kRolloutLanes = 2;
+  int rollout_lanes() const { return rollout_lanes_on(pool_, config_.line_search_lanes); }
+  State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
+    return lane == 0 ? dynamics(x, u, t) : dynamics_in(lane_map_, x, u, t);
+  }
+  template <class LaneFunction>
+  void for_each_rollout(int count, const LaneFunction& rollout) const {
+    run_on(pool_, count, rollout);
   }
 
   Control control_lower_bound(int j) const { return -limit_ - u_hat_[j]; }
   Control control_upper_bound(int j) const { return limit_ - u_hat_[j]; }
 
  private:
+  State dynamics_in(StepMap& map, const State& zeta, const Control& nu, int j) const {
+    const BasicState<ArmJoints> next =
+        map.step_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
+    return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
+  }
+
   CostWeights weights_;
   ProblemConfig config_;
   ThreadPool* pool_;
@@ -156,6 +170,7 @@ class FastSubsystem
   std::array<FullState, NFast + 1> x_hat_;
   std::array<FullControl, NFast + 1> u_hat_;
   mutable std::array<StepMap, NFast> step_maps_;  // one workspace per step, as in problem.hpp
+  mutable StepMap lane_map_;  // line-search lane 1's
 };
 
 }  // namespace hmpc::humanoid

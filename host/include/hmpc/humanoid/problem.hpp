@@ -88,6 +88,10 @@ struct ProblemConfig {
   Parameters parameters{};
   ContactParameters contact{};
   Linearisation linearisation = Linearisation::kSubStepChainRule;
+  // Line-search rollouts run at once on a pool with a second thread (rollout_lanes in
+  // hmpc/solver/problem.hpp): 2, or 1 for one at a time (the benchmark's comparison); the
+  // solution is the same either way.
+  int line_search_lanes = 2;
 };
 
 // The quantities the state cost reads from a state (see the file comment for definitions).
@@ -169,6 +173,7 @@ class HumanoidProblem
       : config_(config), cost_(motion, initial, config), pool_(pool) {
     const BasicModel<ArmJoints> model(config.parameters);
     step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
+    lane_map_ = step_maps_[0];
     upper_ = model.torque_limit;
     lower_ = -model.torque_limit;
   }
@@ -180,9 +185,7 @@ class HumanoidProblem
   double start_time() const { return start_time_; }
   double time_of(int t) const { return start_time_ + t * config_.step; }
 
-  State dynamics(const State& x, const Control& u, int t) const {
-    return to_vector(step_maps_[t].step(to_state<A>(x), u, config_.step));
-  }
+  State dynamics(const State& x, const Control& u, int t) const { return dynamics_in(step_maps_[t], x, u, t); }
   void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
                             ControlJacobian& fu) const {
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
@@ -210,17 +213,30 @@ class HumanoidProblem
 
   template <class StepFunction>
   void for_each_step(int count, const StepFunction& linearize) const {
-    if (pool_ != nullptr) {
-      pool_->for_each(count, linearize);
-    } else {
-      Base::for_each_step(count, linearize);
-    }
+    run_on(pool_, count, linearize);
+  }
+
+  // Line-search lanes (hmpc/solver/problem.hpp): lane 0 steps in step t's workspace, as
+  // dynamics() does, lane 1 in its own; a step depends on its arguments only, so both give
+  // dynamics()'s value.
+  static constexpr int kRolloutLanes = 2;
+  int rollout_lanes() const { return rollout_lanes_on(pool_, config_.line_search_lanes); }
+  State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
+    return lane == 0 ? dynamics(x, u, t) : dynamics_in(lane_map_, x, u, t);
+  }
+  template <class LaneFunction>
+  void for_each_rollout(int count, const LaneFunction& rollout) const {
+    run_on(pool_, count, rollout);
   }
 
   Control control_lower_bound(int) const { return lower_; }
   Control control_upper_bound(int) const { return upper_; }
 
  private:
+  State dynamics_in(StepMap& map, const State& x, const Control& u, int) const {
+    return to_vector(map.step(to_state<A>(x), u, config_.step));
+  }
+
   ProblemConfig config_;
   BasicStateCost<ArmJoints> cost_;
   ThreadPool* pool_;
@@ -228,6 +244,7 @@ class HumanoidProblem
   Control lower_, upper_;
   // One workspace per horizon step (see the file comment).
   mutable std::array<StepMap, N> step_maps_;
+  mutable StepMap lane_map_;  // line-search lane 1's
 };
 
 // `contact` with the motion's chair, if it has one.

@@ -57,4 +57,20 @@ class ThreadPool {
   bool stopping_ = false;
 };
 
+// Runs task(i) for i = 0..count-1 on `pool`, or in order on the calling thread if it is null.
+template <class Task>
+void run_on(ThreadPool* pool, int count, const Task& task) {
+  if (pool != nullptr) {
+    pool->for_each(count, task);
+  } else {
+    for (int i = 0; i < count; ++i) task(i);
+  }
+}
+
+// Line-search lanes for a problem on `pool` (hmpc/solver/problem.hpp's rollout_lanes): the
+// `wanted` number when the pool has a second thread to run them on, else 1.
+inline int rollout_lanes_on(const ThreadPool* pool, int wanted) {
+  return pool != nullptr && pool->threads() > 1 ? wanted : 1;
+}
+
 }  // namespace hmpc::humanoid
