@@ -3,15 +3,15 @@
 //     dynamics Jacobians and Gauss-Newton cost derivatives, serial and on a ThreadPool of 2
 //     (thesis Sec. 2.6.2 used 10 OpenMP threads), with the step map's linearisation (sub-step
 //     chain rule, step.hpp) and with the reference (central differences of whole steps);
-//   - a cold coarse solve with the line search's rollouts one at a time and two at once on the
-//     two threads (hmpc/solver/problem.hpp's rollout lanes; the same solution either way);
 //   - with --closed-loop [--motion NAME] [--threads T] [--linearisation chain-rule|reference]:
 //     every motion (or NAME, e.g. I-standing) for its file's duration under the Fine, Coarse
 //     and Coarse-Fast MPCs of Table 2.4, with and without warm start, on the 1 ms simulator:
 //     max and median solve time per 30 ms sample, iterations, truncated solves, accumulated
 //     cost normalised to Fine, and whether the robot fell (T threads, default 2); for reaching
 //     (on the robot with an arm, the reaching iLQR settings of Sec. 2.6.2) also the hand's
-//     closest approach and when it came within 5 cm (the thesis's reaching time: 1.66 s).
+//     closest approach and when it came within 5 cm (the thesis's reaching time: 1.66 s);
+//     before that, with T > 1, the line search's rollouts one at a time against two at once
+//     (hmpc/solver/problem.hpp's rollout lanes) on motion V.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -76,49 +76,14 @@ void BM_Linearise(benchmark::State& state) {
                  (threads == 1 ? " thread" : " threads"));
 }
 
-// Seconds per solve by line-search lanes.
-std::map<int, double>& seconds_per_solve() {
-  static std::map<int, double> s;
-  return s;
-}
-
-// Arg: line-search lanes. One cold solve (zero initial inputs, Table 2.4's cap 6 and tolerance)
-// of the coarse problem of motion V at 0.3 s, the push-off, where the line search backtracks,
-// on a ThreadPool of 2 threads.
-void BM_CoarseSolve(benchmark::State& state) {
-  const int lanes = static_cast<int>(state.range(0));
-  using Problem = HumanoidProblem<kCoarseHorizon>;
-  using Solver = hmpc::Ilqr<Problem, kCoarseHorizon>;
-  const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/V-low-jump.motion");
-  ProblemConfig config;
-  config.step = kCoarseStep;
-  config.line_search_lanes = lanes;
-  const State x0 = standing_state(config, motion.phases[0].height);
-  ThreadPool pool(2);
-  const auto problem = std::make_unique<Problem>(motion, x0, config, &pool);
-  problem->set_start_time(0.3);
-  const auto solver = std::make_unique<Solver>(hmpc::IlqrConfig<double>::with_cap_and_tolerance(kIterationCap, kTolerance));
-  hmpc::SolveResult<double> result;
-  for (auto _ : state) {
-    solver->set_zero_controls();
-    result = solver->solve(*problem, to_vector(x0));
-  }
-  state.SetLabel(std::to_string(lanes) + (lanes == 1 ? " lane, " : " lanes, ") + std::to_string(result.iterations) +
-                 " iterations, " + std::to_string(result.work.rollout_steps) + " rollout steps");
-}
-
 // Google Benchmark's console output plus a record of each run's real time per iteration.
 class Recorder : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& run : runs) {
       const double seconds = run.GetAdjustedRealTime() / benchmark::GetTimeUnitMultiplier(run.time_unit);
-      const std::string& args = run.run_name.args;
-      if (run.run_name.function_name == "BM_CoarseSolve") {
-        seconds_per_solve()[std::atoi(args.c_str())] = seconds;
-        continue;
-      }
       // run_name.args is "linearisation/threads".
+      const std::string& args = run.run_name.args;
       const std::size_t slash = args.find('/');
       seconds_per_linearisation()[{std::atoi(args.c_str()), std::atoi(args.c_str() + slash + 1)}] =
           seconds;
@@ -148,6 +113,35 @@ std::pair<ClosedLoopSummary, std::string> run_once(const std::string& file, cons
                   s.min_height, s.max_height);
   }
   return {s, outcome};
+}
+
+// Coarse-Fast MPC on motion V, untruncated (so both runs do the same iterations), 2 threads,
+// with the line search's rollouts one at a time and two at once (hmpc/solver/problem.hpp's
+// rollout lanes): mean solve time per sample, alternating runs; the trajectories must agree.
+void line_search_lanes() {
+  const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/V-low-jump.motion");
+  double seconds[2] = {0.0, 0.0};
+  ClosedLoopRun last[2];
+  constexpr int kRepeats = 2;
+  for (int repeat = 0; repeat < kRepeats; ++repeat) {
+    for (int lanes = 1; lanes <= 2; ++lanes) {
+      ClosedLoopConfig config;
+      config.mpc = MpcKind::kCoarseFast;
+      config.truncate = false;
+      config.threads = 2;
+      config.problem.line_search_lanes = lanes;
+      last[lanes - 1] = run_closed_loop(motion, config);
+      for (const ClosedLoopSample& sample : last[lanes - 1].samples) seconds[lanes - 1] += sample.solve_seconds;
+    }
+  }
+  const double samples = static_cast<double>(kRepeats * last[0].samples.size());
+  const bool same = last[0].samples.size() == last[1].samples.size() &&
+                    last[0].samples.back().state.q == last[1].samples.back().state.q &&
+                    last[0].samples.back().state.v == last[1].samples.back().state.v;
+  std::printf("line search, Coarse-Fast on V-low-jump untruncated, 2 threads: one rollout at a time %.2f ms "
+              "per sample, two at once %.2f ms: speed-up %.2fx; final states %s\n\n",
+              seconds[0] / samples * 1e3, seconds[1] / samples * 1e3, seconds[0] / seconds[1],
+              same ? "identical" : "DIFFER");
 }
 
 // Figs. 2.9, 2.10 and 2.12 analogues: every motion under the Fine, Coarse and Coarse-Fast MPC
@@ -199,8 +193,6 @@ BENCHMARK(BM_Linearise)
     ->UseRealTime()
     ->MinTime(1.0);
 
-BENCHMARK(BM_CoarseSolve)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
-
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   bool run_closed_loop = false;
@@ -249,12 +241,9 @@ int main(int argc, char** argv) {
                 kCoarseHorizon, s.at({chain_rule, 1}) * 1e3, s.at({chain_rule, 2}) * 1e3,
                 s.at({chain_rule, 1}) / s.at({chain_rule, 2}));
   }
-  const auto& solve = seconds_per_solve();
-  if (solve.size() == 2) {
-    std::printf("cold coarse solve of motion V's push-off, 2 threads: line search one rollout at a time "
-                "%.2f ms, two at once %.2f ms: speed-up %.2fx (the same solution)\n",
-                solve.at(1) * 1e3, solve.at(2) * 1e3, solve.at(1) / solve.at(2));
+  if (run_closed_loop) {
+    if (threads > 1) line_search_lanes();
+    closed_loop(motions, threads, linearisation);
   }
-  if (run_closed_loop) closed_loop(motions, threads, linearisation);
   return 0;
 }

@@ -324,7 +324,20 @@ TEST(IlqrBudget, IterationBudgetIsHonouredAndPlanImproves) {
     EXPECT_EQ(result.status, hmpc::SolveStatus::kBudgetExhausted);
     EXPECT_LT(result.cost, result.initial_cost);
     EXPECT_DOUBLE_EQ(result.cost, solver.cost());
+    // Linearised once per iteration at most: none after the last, which nothing would use.
+    EXPECT_LE(result.work.derivative_steps, budget * 100) << "budget " << budget;
   }
+}
+
+TEST(IlqrBudget, StopBeforeTheFirstIterationLinearisesNothing) {
+  Pendulum problem;
+  hmpc::Ilqr<Pendulum, 100> solver;
+  const auto result = solver.solve(problem, Pendulum::State(0.0, 0.0), 100, [] { return true; });
+  EXPECT_EQ(result.status, hmpc::SolveStatus::kBudgetExhausted);
+  EXPECT_EQ(result.iterations, 0);
+  EXPECT_EQ(result.work.derivative_steps, 0);
+  EXPECT_EQ(result.work.rollout_steps, 100) << "the warm start's rollout only";
+  EXPECT_DOUBLE_EQ(result.cost, result.initial_cost);
 }
 
 TEST(IlqrBudget, StopPredicateEndsTheSolveWithTheBestPlan) {

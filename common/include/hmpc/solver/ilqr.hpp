@@ -232,13 +232,11 @@ class Ilqr {
 
     const int budget =
         iteration_budget < config_.max_iterations ? iteration_budget : config_.max_iterations;
-    bool derivatives_valid = compute_derivatives(problem);
+    // The nominal trajectory is linearised when an iteration is about to use it, so a solve
+    // ended by its budget or the caller's stop does not pay for derivatives it never uses.
+    bool linearised = false;
     result.status = SolveStatus::kIterationCap;
     while (true) {
-      if (!derivatives_valid) {
-        result.status = SolveStatus::kNumericalFailure;
-        break;
-      }
       if (result.iterations >= budget) {
         result.status = budget < config_.max_iterations ? SolveStatus::kBudgetExhausted
                                                         : SolveStatus::kIterationCap;
@@ -247,6 +245,13 @@ class Ilqr {
       if (stop()) {
         result.status = SolveStatus::kBudgetExhausted;
         break;
+      }
+      if (!linearised) {
+        if (!compute_derivatives(problem)) {
+          result.status = SolveStatus::kNumericalFailure;
+          break;
+        }
+        linearised = true;
       }
 
       // Backward pass, raising mu until Q_uu + mu I is positive definite (Eq. 2.11-2.16).
@@ -312,7 +317,7 @@ class Ilqr {
           result.status = SolveStatus::kConverged;
           break;
         }
-        derivatives_valid = compute_derivatives(problem);
+        linearised = false;
       } else if (!increase_regularization()) {
         result.status = SolveStatus::kStalled;
         break;
