@@ -53,10 +53,11 @@ double perturbation_parameter(const MassMatrix& M);
 
 template <int NFast, int ArmJoints = 0>
 class FastSubsystem
-    : public ProblemBase<FastSubsystem<NFast, ArmJoints>, double, 2 * Dimensions<ArmJoints>::kJoints,
-                         Dimensions<ArmJoints>::kJoints> {
-  using Base = ProblemBase<FastSubsystem<NFast, ArmJoints>, double,
-                           2 * Dimensions<ArmJoints>::kJoints, Dimensions<ArmJoints>::kJoints>;
+    : public StepMapProblem<FastSubsystem<NFast, ArmJoints>, 2 * Dimensions<ArmJoints>::kJoints,
+                            Dimensions<ArmJoints>::kJoints, ArmJoints, NFast> {
+  using Base = StepMapProblem<FastSubsystem<NFast, ArmJoints>, 2 * Dimensions<ArmJoints>::kJoints,
+                              Dimensions<ArmJoints>::kJoints, ArmJoints, NFast>;
+  friend Base;
   static constexpr int A = ArmJoints, kJoints = Dimensions<ArmJoints>::kJoints;
   using StepMap = BasicStepMap<ArmJoints>;
 
@@ -73,10 +74,8 @@ class FastSubsystem
   // config.step is Delta t_f. `pool` (may be null: serial) must outlive the problem.
   FastSubsystem(const CostWeights& weights, const ProblemConfig& config,
                 ThreadPool* pool = nullptr)
-      : weights_(weights), config_(config), pool_(pool) {
+      : Base(config, pool), weights_(weights), config_(config) {
     const BasicModel<ArmJoints> model(config.parameters);
-    step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
-    lane_map_ = step_maps_[0];
     limit_ = model.torque_limit;
     // A valid reference (identity attitude, at rest) until the MPC sets the upper plan.
     for (auto& x : x_hat_) {
@@ -101,10 +100,6 @@ class FastSubsystem
     return with_fast_part(x_hat_[j], fast_part(x_hat_[j]) + zeta);
   }
 
-  // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j.
-  State dynamics(const State& zeta, const Control& nu, int j) const {
-    return dynamics_in(step_maps_[j], zeta, nu, j);
-  }
 
   // fz = dzeta_{j+1} / dzeta_j = dz+ / dz (z_hat is fixed), from the step map's
   // linearisation, or by whole-step central differences (ProblemConfig::linearisation).
@@ -113,7 +108,7 @@ class FastSubsystem
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(zeta, nu, j, fz, fu);
     } else {
-      step_maps_[j].linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
+      this->step_map(j).linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
                                    fu);
     }
   }
@@ -135,28 +130,12 @@ class FastSubsystem
     d.lxx = 2.0 * weights_.fast * StateJacobian::Identity();
   }
 
-  template <class StepFunction>
-  void for_each_step(int count, const StepFunction& linearize) const {
-    run_on(pool_, count, linearize);
-  }
-
-  // Line-search lanes (hmpc/solver/problem.hpp): lane 0 steps in step t's workspace, as
-  // dynamics() does, lane 1 in its own; a step depends on its arguments only, so both give
-  // dynamics()'s value.
-  static constexpr int kRolloutLanes = 2;
-  int rollout_lanes() const { return rollout_lanes_on(pool_, config_.line_search_lanes); }
-  State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
-    return lane == 0 ? dynamics(x, u, t) : dynamics_in(lane_map_, x, u, t);
-  }
-  template <class LaneFunction>
-  void for_each_rollout(int count, const LaneFunction& rollout) const {
-    run_on(pool_, count, rollout);
-  }
-
   Control control_lower_bound(int j) const { return -limit_ - u_hat_[j]; }
   Control control_upper_bound(int j) const { return limit_ - u_hat_[j]; }
 
  private:
+  // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j
+  // (dynamics() in step j's workspace, StepMapProblem).
   State dynamics_in(StepMap& map, const State& zeta, const Control& nu, int j) const {
     const BasicState<ArmJoints> next =
         map.step_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
@@ -165,12 +144,9 @@ class FastSubsystem
 
   CostWeights weights_;
   ProblemConfig config_;
-  ThreadPool* pool_;
   FullControl limit_;
   std::array<FullState, NFast + 1> x_hat_;
   std::array<FullControl, NFast + 1> u_hat_;
-  mutable std::array<StepMap, NFast> step_maps_;  // one workspace per step, as in problem.hpp
-  mutable StepMap lane_map_;  // line-search lane 1's
 };
 
 }  // namespace hmpc::humanoid

@@ -148,13 +148,65 @@ class BasicStateCost {
 
 using StateCost = BasicStateCost<0>;
 
+// The base of the humanoid's iLQR problems (HumanoidProblem, FastSubsystem): dynamics by the
+// step map, one workspace per step so that the solver's per-step linearisations may run on a
+// ThreadPool (for_each_step), and one more for the line search's second lane (rollout lanes,
+// hmpc/solver/problem.hpp). Derived defines
+//   State dynamics_in(BasicStepMap<A>& map, const State& x, const Control& u, int t) const,
+// its step t in `map`'s workspace; a step depends on its arguments only, so every workspace
+// gives the same value.
+template <class Derived, int Nx, int Nu, int A, int Steps>
+class StepMapProblem : public ProblemBase<Derived, double, Nx, Nu> {
+  using Base = ProblemBase<Derived, double, Nx, Nu>;
+
+ public:
+  using typename Base::Control;
+  using typename Base::State;
+
+  State dynamics(const State& x, const Control& u, int t) const {
+    return derived().dynamics_in(step_maps_[t], x, u, t);
+  }
+  template <class StepFunction>
+  void for_each_step(int count, const StepFunction& linearize) const {
+    run_on(pool_, count, linearize);
+  }
+  static constexpr int kRolloutLanes = 2;
+  int rollout_lanes() const { return rollout_lanes_on(pool_, lanes_); }
+  State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
+    return derived().dynamics_in(lane == 0 ? step_maps_[t] : lane_map_, x, u, t);
+  }
+  template <class LaneFunction>
+  void for_each_rollout(int count, const LaneFunction& rollout) const {
+    run_on(pool_, count, rollout);
+  }
+
+ protected:
+  // `pool` (may be null: serial) must outlive the problem and its copies.
+  StepMapProblem(const ProblemConfig& config, ThreadPool* pool)
+      : pool_(pool), lanes_(config.line_search_lanes) {
+    const BasicModel<A> model(config.parameters);
+    step_maps_.fill(BasicStepMap<A>(model, config.parameters, config.contact, config.max_substep));
+    lane_map_ = step_maps_[0];
+  }
+  BasicStepMap<A>& step_map(int t) const { return step_maps_[t]; }
+
+ private:
+  const Derived& derived() const { return static_cast<const Derived&>(*this); }
+
+  ThreadPool* pool_;
+  int lanes_;
+  mutable std::array<BasicStepMap<A>, Steps> step_maps_;
+  mutable BasicStepMap<A> lane_map_;
+};
+
 // The problem of horizon N for the biped (ArmJoints 0) or the robot with an arm (1).
 template <int N, int ArmJoints = 0>
 class HumanoidProblem
-    : public ProblemBase<HumanoidProblem<N, ArmJoints>, double, Dimensions<ArmJoints>::kStateSize,
-                         Dimensions<ArmJoints>::kJoints> {
-  using Base = ProblemBase<HumanoidProblem<N, ArmJoints>, double, Dimensions<ArmJoints>::kStateSize,
-                           Dimensions<ArmJoints>::kJoints>;
+    : public StepMapProblem<HumanoidProblem<N, ArmJoints>, Dimensions<ArmJoints>::kStateSize,
+                            Dimensions<ArmJoints>::kJoints, ArmJoints, N> {
+  using Base = StepMapProblem<HumanoidProblem<N, ArmJoints>, Dimensions<ArmJoints>::kStateSize,
+                              Dimensions<ArmJoints>::kJoints, ArmJoints, N>;
+  friend Base;
   using StepMap = BasicStepMap<ArmJoints>;
   using JointVector = BasicJointVector<ArmJoints>;
   static constexpr int A = ArmJoints;
@@ -170,10 +222,8 @@ class HumanoidProblem
   // `pool` (may be null: serial) must outlive the problem and its copies.
   HumanoidProblem(const Motion& motion, const BasicState<ArmJoints>& initial,
                   const ProblemConfig& config = ProblemConfig{}, ThreadPool* pool = nullptr)
-      : config_(config), cost_(motion, initial, config), pool_(pool) {
+      : Base(config, pool), config_(config), cost_(motion, initial, config) {
     const BasicModel<ArmJoints> model(config.parameters);
-    step_maps_.fill(StepMap(model, config.parameters, config.contact, config.max_substep));
-    lane_map_ = step_maps_[0];
     upper_ = model.torque_limit;
     lower_ = -model.torque_limit;
   }
@@ -185,13 +235,12 @@ class HumanoidProblem
   double start_time() const { return start_time_; }
   double time_of(int t) const { return start_time_ + t * config_.step; }
 
-  State dynamics(const State& x, const Control& u, int t) const { return dynamics_in(step_maps_[t], x, u, t); }
   void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
                             ControlJacobian& fu) const {
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(x, u, t, fx, fu);
     } else {
-      step_maps_[t].linearise(to_state<A>(x), u, config_.step, fx, fu);
+      this->step_map(t).linearise(to_state<A>(x), u, config_.step, fx, fu);
     }
   }
   double running_cost(const State& x, const Control& u, int t) const {
@@ -211,24 +260,6 @@ class HumanoidProblem
     cost_.derivatives(x, time_of(t), d.lx, d.lxx);
   }
 
-  template <class StepFunction>
-  void for_each_step(int count, const StepFunction& linearize) const {
-    run_on(pool_, count, linearize);
-  }
-
-  // Line-search lanes (hmpc/solver/problem.hpp): lane 0 steps in step t's workspace, as
-  // dynamics() does, lane 1 in its own; a step depends on its arguments only, so both give
-  // dynamics()'s value.
-  static constexpr int kRolloutLanes = 2;
-  int rollout_lanes() const { return rollout_lanes_on(pool_, config_.line_search_lanes); }
-  State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
-    return lane == 0 ? dynamics(x, u, t) : dynamics_in(lane_map_, x, u, t);
-  }
-  template <class LaneFunction>
-  void for_each_rollout(int count, const LaneFunction& rollout) const {
-    run_on(pool_, count, rollout);
-  }
-
   Control control_lower_bound(int) const { return lower_; }
   Control control_upper_bound(int) const { return upper_; }
 
@@ -239,12 +270,8 @@ class HumanoidProblem
 
   ProblemConfig config_;
   BasicStateCost<ArmJoints> cost_;
-  ThreadPool* pool_;
   double start_time_ = 0.0;
   Control lower_, upper_;
-  // One workspace per horizon step (see the file comment).
-  mutable std::array<StepMap, N> step_maps_;
-  mutable StepMap lane_map_;  // line-search lane 1's
 };
 
 // `contact` with the motion's chair, if it has one.
