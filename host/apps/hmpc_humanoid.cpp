@@ -53,8 +53,8 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
               s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
               last.base.velocity.y(), last.base.velocity.z());
   std::printf("solve per 30 ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
-              "truncated %d, unusable %d of %zu\n",
-              s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.unusable,
+              "truncated %d, over 30 ms %d, unusable %d of %zu\n",
+              s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.overruns, s.unusable,
               run.samples.size());
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
   if (run.fell()) {

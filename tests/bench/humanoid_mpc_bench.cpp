@@ -6,8 +6,9 @@
 //   - with --closed-loop [--motion NAME] [--threads T] [--linearisation chain-rule|reference]:
 //     every motion (or NAME, e.g. I-standing) for its file's duration under the Fine, Coarse
 //     and Coarse-Fast MPCs of Table 2.4, with and without warm start, on the 1 ms simulator:
-//     max and median solve time per 30 ms sample, iterations, truncated solves, accumulated
-//     cost normalised to Fine, and whether the robot fell (T threads, default 2); for reaching
+//     max and median solve time per 30 ms sample, solves over 30 ms, iterations, truncated
+//     solves, accumulated cost normalised to Fine, and whether the robot fell (T threads,
+//     default 2); for reaching
 //     (on the robot with an arm, the reaching iLQR settings of Sec. 2.6.2) also the hand's
 //     closest approach and when it came within 5 cm (the thesis's reaching time: 1.66 s);
 //     before that, with T > 1, the line search's rollouts one at a time against two at once
@@ -151,8 +152,8 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
               "(reaching: %d, %.1f), %d thread%s, %s linearisation, solves truncated at 30 ms\n",
               kIterationCap, kTolerance, kReachingIterationCap, kReachingTolerance, threads,
               threads == 1 ? "" : "s", name_of(linearisation));
-  std::printf("%-22s %-12s %-5s %9s %9s %6s %5s %11s %9s %s\n", "motion", "MPC", "warm", "max [ms]",
-              "med [ms]", "iters", "trunc", "cost", "cost/Fine", "outcome");
+  std::printf("%-22s %-12s %-5s %9s %9s %5s %6s %5s %11s %9s %s\n", "motion", "MPC", "warm", "max [ms]",
+              "med [ms]", ">30ms", "iters", "trunc", "cost", "cost/Fine", "outcome");
   for (const std::string& file : motions) {
     const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
     for (const bool warm : {true, false}) {
@@ -166,8 +167,8 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
         const auto [s, outcome] = motion.reach.active ? run_once<1>(file, motion, config)
                                                       : run_once<0>(file, motion, config);
         if (config.mpc == MpcKind::kFine) fine_cost = s.total_cost;
-        std::printf("%-22s %-12s %-5s %9.1f %9.1f %6.2f %5d %11.1f %9.3f %s\n", file.c_str(),
-                    name_of(config.mpc), warm ? "yes" : "no", s.max_solve_ms, s.median_solve_ms,
+        std::printf("%-22s %-12s %-5s %9.1f %9.1f %5d %6.2f %5d %11.1f %9.3f %s\n", file.c_str(),
+                    name_of(config.mpc), warm ? "yes" : "no", s.max_solve_ms, s.median_solve_ms, s.overruns,
                     s.mean_iterations, s.truncated, s.total_cost,
                     fine_cost > 0.0 ? s.total_cost / fine_cost : 0.0, outcome.c_str());
       }

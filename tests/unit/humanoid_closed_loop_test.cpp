@@ -68,6 +68,21 @@ TEST(HumanoidPhysicalChecks, StandingBand) {
   EXPECT_EQ(check_motion("I", m, run).verdict, "fell at 1.00 s");
 }
 
+// The summary counts the solves longer than the sampling period, the max alone not telling a
+// single stall from a systematic overrun.
+TEST(HumanoidClosedLoop, SummaryCountsSolvesOverThePeriod) {
+  ClosedLoopRun run;
+  for (const double seconds : {0.010, 0.029, 0.0301, 0.045, 0.020}) {
+    ClosedLoopSample s = sample(0.03 * (run.samples.size() + 1), 0.85, 230.0, 230.0);
+    s.solve_seconds = seconds;
+    run.samples.push_back(s);
+  }
+  const ClosedLoopSummary s = summarise(run);
+  EXPECT_EQ(s.overruns, 2);
+  EXPECT_DOUBLE_EQ(s.max_solve_ms, 45.0);
+  EXPECT_DOUBLE_EQ(s.median_solve_ms, 29.0);
+}
+
 TEST(HumanoidPhysicalChecks, JumpNeedsAFlightAndAnUprightLanding) {
   const Motion m = motion("V-low-jump");
   ClosedLoopRun run;

@@ -238,6 +238,7 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
     iterations += sample.iterations;
     s.truncated += sample.truncated ? 1 : 0;
     s.unusable += sample.plan_usable ? 0 : 1;
+    s.overruns += sample.solve_seconds > kSamplingPeriod ? 1 : 0;
     s.total_cost += sample.cost;
     s.min_height = std::min(s.min_height, sample.base.position.z());
     s.max_height = std::max(s.max_height, sample.base.position.z());

@@ -97,6 +97,7 @@ struct ClosedLoopSummary {
   double max_solve_ms = 0.0, median_solve_ms = 0.0;
   double mean_iterations = 0.0;
   int truncated = 0, unusable = 0;
+  int overruns = 0;  // solves that took longer than the 30 ms sampling period
   double total_cost = 0.0;
   double min_height = 0.0, max_height = 0.0;
 };
