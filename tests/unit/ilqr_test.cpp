@@ -310,8 +310,11 @@ TEST(IlqrLineSearch, LanesTakeTheSameStepsAsOneAtATime) {
       }
     }
     // More rollouts in all (a round's later lanes are wasted when an earlier one is accepted).
-    if (lanes == 1) EXPECT_EQ(result.work.rollout_steps, reference.work.rollout_steps);
-    if (lanes > 1) EXPECT_GT(result.work.rollout_steps, reference.work.rollout_steps);
+    if (lanes == 1) {
+      EXPECT_EQ(result.work.rollout_steps, reference.work.rollout_steps);
+    } else {
+      EXPECT_GT(result.work.rollout_steps, reference.work.rollout_steps);
+    }
   }
 }
 
@@ -349,6 +352,31 @@ TEST(IlqrBudget, StopPredicateEndsTheSolveWithTheBestPlan) {
   EXPECT_EQ(result.status, hmpc::SolveStatus::kBudgetExhausted);
   EXPECT_EQ(result.iterations, 4);
   EXPECT_LT(result.cost, result.initial_cost);
+}
+
+// A deadline that has passed (expired()) ends the solve between line-search rollouts: with
+// every step rejected (an unreachable reduction ratio) the search would otherwise run all its
+// 11 rollouts per iteration until the regularisation gives up.
+TEST(IlqrBudget, ExpiredDeadlineCutsTheLineSearchShort) {
+  struct PassedDeadline {
+    int asked = 0;
+    bool operator()() const { return false; }
+    bool expired() { return ++asked > 0; }
+  };
+  Pendulum problem;
+  hmpc::IlqrConfig<double> config;
+  config.min_reduction_ratio = 1e9;
+  hmpc::Ilqr<Pendulum, 100> unbounded(config), bounded(config);
+  const auto full = unbounded.solve(problem, Pendulum::State(0.0, 0.0), 1000);
+  EXPECT_EQ(full.status, hmpc::SolveStatus::kStalled);
+  EXPECT_GE(full.work.rollout_steps, 100 + 11 * 100);
+  PassedDeadline deadline;
+  const auto cut = bounded.solve(problem, Pendulum::State(0.0, 0.0), 1000, deadline);
+  EXPECT_EQ(cut.status, hmpc::SolveStatus::kBudgetExhausted);
+  EXPECT_EQ(deadline.asked, 1);
+  EXPECT_EQ(cut.iterations, 1);
+  EXPECT_EQ(cut.work.rollout_steps, 100 + 100) << "the warm start and one line-search rollout";
+  EXPECT_DOUBLE_EQ(cut.cost, cut.initial_cost) << "the nominal plan is kept";
 }
 
 TEST(IlqrWarmStart, TimeShiftCutsIterations) {

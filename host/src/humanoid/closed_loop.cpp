@@ -71,7 +71,9 @@ double lowest_non_foot_point(const BasicDynamics<A>& dynamics, const BasicState<
 // The truncation (ClosedLoopConfig::truncate): called before each iteration of a layer, it
 // stops the solve when the layer's longest iteration so far in this update would no longer
 // end before the deadline, so that a solve ends within its time instead of overrunning it by
-// its last iteration. A layer's first iteration runs if it starts before the deadline.
+// its last iteration. A layer's first iteration runs if it starts before the deadline. An
+// iteration longer than predicted (its line search backtracking further than any before)
+// is cut short between rollouts once the deadline has passed (expired(), ilqr.hpp).
 class DeadlineStop {
  public:
   DeadlineStop(Clock::time_point deadline, bool enabled) : deadline_(deadline), enabled_(enabled) {}
@@ -82,6 +84,7 @@ class DeadlineStop {
     last_ = now;
     return enabled_ && now + longest_ >= deadline_;
   }
+  bool expired() const { return enabled_ && Clock::now() >= deadline_; }
 
  private:
   Clock::time_point deadline_, last_{};

@@ -23,6 +23,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
+#include <utility>
 
 #include "hmpc/solver/box_qp.hpp"
 #include "hmpc/solver/problem.hpp"
@@ -114,10 +116,29 @@ struct SolveResult {
 };
 
 // Default stop predicate: never stops early. A caller with a deadline passes a functor that
-// reads its clock; it is checked before every iteration.
+// reads its clock; it is checked before every iteration. A predicate that also has
+// `bool expired()` is asked after each batch of line-search rollouts too: true there ends the
+// solve at once with the nominal plan (the iteration's step is abandoned), so a long search
+// (up to line_search_steps rollouts) cannot carry the solve far past its deadline.
 struct NeverStop {
   constexpr bool operator()() const { return false; }
 };
+
+namespace detail {
+template <class Stop, class = void>
+struct HasExpired : std::false_type {};
+template <class Stop>
+struct HasExpired<Stop, std::void_t<decltype(std::declval<Stop&>().expired())>> : std::true_type {};
+
+template <class Stop>
+bool expired(Stop& stop) {
+  if constexpr (HasExpired<Stop>::value) {
+    return stop.expired();
+  } else {
+    return false;
+  }
+}
+}  // namespace detail
 
 template <class Problem, int N>
 class Ilqr {
@@ -286,9 +307,10 @@ class Ilqr {
       // taken is the same as one at a time.
       const int requested = problem.rollout_lanes();
       const int lanes = requested < 1 ? 1 : (requested > kLanes ? kLanes : requested);
-      bool accepted = false;
+      bool accepted = false, out_of_time = false;
       Scalar reduction = 0;
-      for (int first = 0; first < config_.line_search_steps && !accepted; first += lanes) {
+      for (int first = 0; first < config_.line_search_steps && !accepted && !out_of_time;
+           first += lanes) {
         const int count = config_.line_search_steps - first < lanes
                               ? config_.line_search_steps - first : lanes;
         problem.for_each_rollout(count, [&](int lane) {
@@ -309,6 +331,11 @@ class Ilqr {
             break;
           }
         }
+        out_of_time = !accepted && detail::expired(stop);
+      }
+      if (out_of_time) {
+        result.status = SolveStatus::kBudgetExhausted;
+        break;
       }
 
       if (accepted) {
