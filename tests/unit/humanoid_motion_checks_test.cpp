@@ -1,4 +1,4 @@
-// The physical checks of issue 5 for the humanoid's dynamic motions (II, IV-VII), whole-body
+// The physical checks of issue 5 for the humanoid's dynamic motions (II, IV-VIII), whole-body
 // reaching with the robot with an arm, and a push recovery, each a closed-loop run under Coarse-Fast MPC (closed_loop.hpp), untruncated
 // (test::run). Label long: minutes under AddressSanitizer, which CI's host-asan preset skips;
 // host-release runs them.
@@ -58,6 +58,12 @@ TEST(HumanoidMotionChecks, CoarseFastJumpsHigherThanTheLowJump) {
 // Motion VI (issue 5's check): motion V's checks, and the yaw turned by pi +- 0.3 rad.
 TEST(HumanoidMotionChecks, CoarseFastJumpsWithAHalfTurn) {
   expect_check_passes("VI-half-turn-jump");
+}
+
+// Motion VIII (issue 5's check): a flight, the pitch turned by two full rotations (at least
+// 4 pi - 0.5 rad), then the last 0.3 s on its feet, upright, in the standing band.
+TEST(HumanoidMotionChecks, CoarseFastDoesADoubleFlipAndLandsUpright) {
+  expect_check_passes("VIII-double-flip");
 }
 
 // Reaching (issue 5's check, Eq. 2.53): the robot with an arm steps towards the target and
