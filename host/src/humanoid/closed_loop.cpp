@@ -73,10 +73,13 @@ double lowest_non_foot_point(const BasicDynamics<A>& dynamics, const BasicState<
 // end before the deadline, so that a solve ends within its time instead of overrunning it by
 // its last iteration. A layer's first iteration runs if it starts before the deadline. An
 // iteration longer than predicted (its line search backtracking further than any before)
-// is cut short between rollouts once the deadline has passed (expired(), ilqr.hpp).
+// is cut short between rollouts once the hard deadline, the end of the sampling period, has
+// passed (expired(), ilqr.hpp): Coarse-Fast's upper layer may overrun its share of the period
+// into the lower layer's, as before, but no layer the period.
 class DeadlineStop {
  public:
-  DeadlineStop(Clock::time_point deadline, bool enabled) : deadline_(deadline), enabled_(enabled) {}
+  DeadlineStop(Clock::time_point deadline, Clock::time_point hard_deadline, bool enabled)
+      : deadline_(deadline), hard_deadline_(hard_deadline), enabled_(enabled) {}
   bool operator()() {
     const Clock::time_point now = Clock::now();
     if (started_) longest_ = std::max(longest_, now - last_);
@@ -84,10 +87,10 @@ class DeadlineStop {
     last_ = now;
     return enabled_ && now + longest_ >= deadline_;
   }
-  bool expired() const { return enabled_ && Clock::now() >= deadline_; }
+  bool expired() const { return enabled_ && Clock::now() >= hard_deadline_; }
 
  private:
-  Clock::time_point deadline_, last_{};
+  Clock::time_point deadline_, hard_deadline_, last_{};
   Clock::duration longest_{0};
   bool enabled_, started_ = false;
 };
@@ -108,12 +111,13 @@ constexpr double kUpperShare = 0.75;
 // period, the lower layer until its end.
 template <class Mpc, int A>
 void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate) {
-  DeadlineStop stop(start + period(1.0), truncate);
+  DeadlineStop stop(start + period(1.0), start + period(1.0), truncate);
   mpc.update(to_vector(x), stop);
 }
 template <int A>
 void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate) {
-  DeadlineStop upper(start + period(kUpperShare), truncate), fast(start + period(1.0), truncate);
+  const Clock::time_point end = start + period(1.0);
+  DeadlineStop upper(start + period(kUpperShare), end, truncate), fast(end, end, truncate);
   mpc.update(to_vector(x), upper, fast);
 }
 
