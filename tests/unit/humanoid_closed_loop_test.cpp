@@ -196,6 +196,26 @@ TEST(HumanoidClosedLoop, RejectsBadConfigurations) {
   config.duration = 0.1;
   config.threads = 0;
   EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+  config.threads = 1;
+  config.initial_velocity = Eigen::Vector3d(NAN, 0.0, 0.0);
+  EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+  config.initial_velocity = Eigen::Vector3d(0.0, 1.5, 0.0);
+  EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+}
+
+// The benchmark's perturbed starts: the whole robot moving at the start, joints at rest.
+TEST(HumanoidClosedLoop, ANudgedStartMovesTheRobot) {
+  const Motion m = motion("I-standing");
+  ClosedLoopConfig config;
+  config.mpc = MpcKind::kCoarse;
+  config.duration = 0.06;
+  config.threads = 1;
+  config.initial_velocity = Eigen::Vector3d(0.0, -0.1, 0.0);
+  const ClosedLoopRun r = run_closed_loop(m, config);
+  EXPECT_NEAR(r.initial.v[4], -0.1, 1e-12) << "upright at the start: torso axes are the world's";
+  EXPECT_TRUE(r.initial.v.head<3>().isZero() && r.initial.v.tail<8>().isZero());
+  ASSERT_EQ(r.samples.size(), 2u);
+  EXPECT_LT(r.samples[0].base.position.y(), r.initial.q[1] - 0.001) << "moved right (-y) by a millimetre or more";
 }
 
 TEST(HumanoidClosedLoop, MpcKindNamesRoundTrip) {

@@ -1,5 +1,6 @@
 #include "hmpc/humanoid/closed_loop.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -214,7 +215,13 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   ThreadPool* workers = config.threads > 1 ? &pool : nullptr;
   ProblemConfig start = config.problem;
   start.contact = contact_for(motion, config.problem.contact);
-  const BasicState<A> initial = standing_state<A>(start, kStartHeight);
+  if (!config.initial_velocity.allFinite() || config.initial_velocity.norm() > 1.0) {
+    throw std::invalid_argument("closed loop: the initial velocity must be finite and at most 1 m/s");
+  }
+  BasicState<A> initial = standing_state<A>(start, kStartHeight);
+  // v's linear part is the torso origin's velocity in torso coordinates (model.hpp).
+  const Eigen::Quaterniond orientation(initial.q[3], initial.q[4], initial.q[5], initial.q[6]);
+  initial.v.template segment<3>(3) = orientation.conjugate() * config.initial_velocity;
   switch (config.mpc) {
     case MpcKind::kFine: {
       const auto mpc = make_single_layer<kFineHorizon, A>(motion, initial, workers, config.problem, kFineStep);

@@ -43,6 +43,9 @@ struct ClosedLoopConfig {
   // deepest squat keeps the knees and hips some 0.3 m up.
   double fallen_clearance = 0.05;
   int threads = 2;  // linearisation threads (ThreadPool), 1: serial
+  // The whole robot's velocity at the start [m/s], world (joint rates zero, so the feet slide
+  // until friction stops them): the benchmark's perturbed starts. At most 1 m/s.
+  Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   ProblemConfig problem{};
 };
 
