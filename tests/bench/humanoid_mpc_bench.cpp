@@ -13,7 +13,8 @@
 //     (on the robot with an arm, the reaching iLQR settings of Sec. 2.6.2) also the hand's
 //     closest approach and when it came within 5 cm (the thesis's reaching time: 1.66 s);
 //     before that, with T > 1, the line search's rollouts one at a time against two at once
-//     (hmpc/solver/problem.hpp's rollout lanes) on motion V.
+//     (hmpc/solver/problem.hpp's rollout lanes) on motion V; after it, Fig. 2.10's cost
+//     comparison (warm-started, untruncated) repeated from five perturbed starts.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
