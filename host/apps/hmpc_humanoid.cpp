@@ -3,6 +3,7 @@
 // (trajectory.csv, filmstrip.png, base.png; viewing.hpp).
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "hmpc/cli/arguments.hpp"
@@ -29,6 +30,8 @@ void usage(std::FILE* out) {
                "                      (default: humanoid-MOTION-KIND)\n"
                "  --no-warm-start     skip the offline optimisation of the initial inputs\n"
                "  --no-truncate       let a solve run past the 30 ms sampling time\n"
+               "  --initial-velocity VX,VY,VZ  the whole robot moving at the start [m/s], world,\n"
+               "                      at most 1 m/s (default: at rest)\n"
                "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
                "ground), 2 bad arguments or motion file, 1 the log or pictures could not be written\n",
                kFellStatus);
@@ -105,6 +108,21 @@ int main(int argc, char** argv) {
   parser.text("--out", [&](const std::string& v) {
     out = v;
     return v.empty() ? std::string("--out needs a directory") : std::string();
+  });
+  parser.text("--initial-velocity", [&](const std::string& v) {
+    const std::string what = "three numbers VX,VY,VZ [m/s] of norm at most 1";
+    std::stringstream in(v);
+    std::string part;
+    for (int i = 0; i < 3; ++i) {
+      double value = 0.0;
+      if (!std::getline(in, part, ',') || !hmpc::cli::parse_number(part, -1.0, 1.0, value)) {
+        return hmpc::cli::bad_value("--initial-velocity", what, v);
+      }
+      config.initial_velocity[i] = value;
+    }
+    const bool extra = static_cast<bool>(std::getline(in, part));
+    return extra || config.initial_velocity.norm() > 1.0 ? hmpc::cli::bad_value("--initial-velocity", what, v)
+                                                         : std::string();
   });
   parser.flag("--no-warm-start", no_warm_start);
   parser.flag("--no-truncate", no_truncate);
