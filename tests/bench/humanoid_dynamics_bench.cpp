@@ -1,24 +1,36 @@
-// Our humanoid dynamics against Simbody's on the same model and the same random states, side by
-// side in one run (DESIGN.md §6): bias forces (our RNEA), mass matrix (our CRBA) and forward
+// Our humanoid dynamics against Simbody's on the same model (the rigid bodies, without the joint
+// armature Simbody's twin cannot mirror) and the same random states, side by side in one run
+// (DESIGN.md §6): bias forces (our RNEA), mass matrix (our CRBA) and forward
 // dynamics (ours: RNEA + CRBA + Cholesky; Simbody: realize(Acceleration), its O(n)
 // articulated-body method). Each Simbody call includes setting its state from ours (it must
 // recompute from q and v, as ours does) and the conversion to our coordinates (14x14 products,
-// plus one multiplyByM for the bias forces).
+// plus one multiplyByM for the bias forces). And the derivatives of forward dynamics by
+// forward differences, the MPC's way (finite_difference.hpp's step), in q, v and the joint
+// torques: 1 + 15 + 14 + 8 = 38 forward dynamics each, the same perturbed states for both
+// (quaternion columns renormalised, so that each engine sees a valid state); the table also
+// gives the largest difference between the two Jacobians.
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "hmpc/humanoid/dynamics.hpp"
+#include "hmpc/solver/finite_difference.hpp"
 #include "simbody_humanoid.hpp"
 
 namespace {
 
 using namespace hmpc::humanoid;
+
+// Ours on Simbody's twin's model: the rigid bodies without joint armature (simbody_humanoid.hpp),
+// so that both compute the same accelerations.
+Model rigid_model() { return Model(hmpc::hil::SimbodyHumanoid::rigid_parameters()); }
 
 struct Sample {
   Configuration q;
@@ -28,7 +40,7 @@ struct Sample {
 
 const std::vector<Sample>& samples() {
   static const std::vector<Sample> all = [] {
-    const Model model;
+    const Model model = rigid_model();
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
     std::vector<Sample> out(64);
@@ -61,15 +73,15 @@ void run(benchmark::State& state, Call call) {
 }
 
 void ours_rnea(benchmark::State& state) {
-  Dynamics d;
+  Dynamics d{rigid_model()};
   run(state, [&](const Sample& s) { benchmark::DoNotOptimize(d.bias_forces(s.q, s.v)); });
 }
 void ours_crba(benchmark::State& state) {
-  Dynamics d;
+  Dynamics d{rigid_model()};
   run(state, [&](const Sample& s) { benchmark::DoNotOptimize(d.mass_matrix(s.q)); });
 }
 void ours_forward(benchmark::State& state) {
-  Dynamics d;
+  Dynamics d{rigid_model()};
   run(state, [&](const Sample& s) { benchmark::DoNotOptimize(d.forward_dynamics(s.q, s.v, s.tau)); });
 }
 void simbody_bias(benchmark::State& state) {
@@ -93,12 +105,75 @@ void simbody_forward(benchmark::State& state) {
     benchmark::DoNotOptimize(sim.forward_dynamics(s.tau));
   });
 }
+// d(qddot)/d(q, v, tau_joints) by forward differences of `forward(q, v, tau)`.
+using ForwardJacobian = Eigen::Matrix<double, kDofs, kConfigurationSize + kDofs + kJoints>;
+template <class Forward>
+ForwardJacobian forward_jacobian(const Sample& s, Forward forward) {
+  ForwardJacobian J;
+  const Velocity a = forward(s.q, s.v, s.tau);
+  for (int i = 0; i < kConfigurationSize; ++i) {
+    const double d = hmpc::detail::fd_step(s.q[i], 0.5);
+    Configuration q = s.q;
+    q[i] += d;
+    q.segment<4>(3).normalize();
+    J.col(i) = (forward(q, s.v, s.tau) - a) / d;
+  }
+  for (int i = 0; i < kDofs; ++i) {
+    const double d = hmpc::detail::fd_step(s.v[i], 0.5);
+    Velocity v = s.v;
+    v[i] += d;
+    J.col(kConfigurationSize + i) = (forward(s.q, v, s.tau) - a) / d;
+  }
+  for (int j = 0; j < kJoints; ++j) {
+    const double d = hmpc::detail::fd_step(s.tau[kBaseDofs + j], 0.5);
+    Velocity tau = s.tau;
+    tau[kBaseDofs + j] += d;
+    J.col(kConfigurationSize + kDofs + j) = (forward(s.q, s.v, tau) - a) / d;
+  }
+  return J;
+}
+struct OursForward {
+  Dynamics d{rigid_model()};
+  Velocity operator()(const Configuration& q, const Velocity& v, const Velocity& tau) {
+    return d.forward_dynamics(q, v, tau);
+  }
+};
+struct SimbodyForward {
+  hmpc::hil::SimbodyHumanoid sim;
+  Velocity operator()(const Configuration& q, const Velocity& v, const Velocity& tau) {
+    sim.set_state(q, v);
+    return sim.forward_dynamics(tau);
+  }
+};
+void ours_derivatives(benchmark::State& state) {
+  OursForward f;
+  run(state, [&](const Sample& s) { benchmark::DoNotOptimize(forward_jacobian(s, std::ref(f))); });
+}
+void simbody_derivatives(benchmark::State& state) {
+  SimbodyForward f;
+  run(state, [&](const Sample& s) { benchmark::DoNotOptimize(forward_jacobian(s, std::ref(f))); });
+}
+// Largest |entry| difference of the two Jacobians over the samples, relative to the largest
+// entry.
+double jacobian_disagreement() {
+  OursForward ours;
+  SimbodyForward simbody;
+  double worst = 0.0;
+  for (const Sample& s : samples()) {
+    const ForwardJacobian a = forward_jacobian(s, std::ref(ours)), b = forward_jacobian(s, std::ref(simbody));
+    worst = std::max(worst, (a - b).cwiseAbs().maxCoeff() / a.cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
 BENCHMARK(ours_rnea);
 BENCHMARK(simbody_bias);
 BENCHMARK(ours_crba);
 BENCHMARK(simbody_mass);
 BENCHMARK(ours_forward);
 BENCHMARK(simbody_forward);
+BENCHMARK(ours_derivatives);
+BENCHMARK(simbody_derivatives);
 
 // Keeps each benchmark's time per call (ns) for the side-by-side table.
 class Recorder : public benchmark::ConsoleReporter {
@@ -120,11 +195,15 @@ int main(int argc, char** argv) {
   std::printf("%-18s %12s %12s %14s\n", "quantity", "ours [us]", "Simbody [us]", "Simbody / ours");
   const char* rows[][3] = {{"bias forces c", "ours_rnea", "simbody_bias"},
                            {"mass matrix M", "ours_crba", "simbody_mass"},
-                           {"forward dynamics", "ours_forward", "simbody_forward"}};
+                           {"forward dynamics", "ours_forward", "simbody_forward"},
+                           {"its derivatives", "ours_derivatives", "simbody_derivatives"}};
   for (const auto& row : rows) {
     const double ours = recorder.ns[row[1]], simbody = recorder.ns[row[2]];
     std::printf("%-18s %12.3f %12.3f %13.2fx\n", row[0], ours / 1e3, simbody / 1e3, simbody / ours);
   }
+  std::printf("derivatives: d(qddot)/d(q, v, tau) by forward differences, 38 forward dynamics; the two "
+              "Jacobians differ by at most %.1e of their largest entry (finite-difference noise)\n",
+              jacobian_disagreement());
   benchmark::Shutdown();
   return 0;
 }
