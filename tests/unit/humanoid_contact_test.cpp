@@ -12,6 +12,7 @@
 
 #include "hmpc/humanoid/contact.hpp"
 #include "hmpc/humanoid/step.hpp"
+#include "humanoid_mirror.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 
 namespace {
@@ -231,23 +232,6 @@ TEST(HumanoidContact, SlidesAboveLimit) {
 }
 
 // (d) Extreme states: finite forces inside the friction cone, finite steps.
-// The model's mirror image in the sagittal (x-z) plane: y and the rotations about x and z
-// change sign, the legs swap (positive abduction abducts either leg, model.hpp).
-State mirrored(const State& x) {
-  State m = x;
-  m.q[1] = -x.q[1];
-  m.q[4] = -x.q[4];  // quaternion (w, x, y, z)
-  m.q[6] = -x.q[6];
-  m.v[0] = -x.v[0];  // omega, torso axes
-  m.v[2] = -x.v[2];
-  m.v[4] = -x.v[4];  // v_o, torso axes
-  for (int j = 0; j < kJointsPerLeg; ++j) {
-    std::swap(m.q[7 + j], m.q[7 + kJointsPerLeg + j]);
-    std::swap(m.v[kBaseDofs + j], m.v[kBaseDofs + kJointsPerLeg + j]);
-  }
-  return m;
-}
-
 // The body, its joints and its contacts are left-right symmetric: a lopsided motion and its
 // mirror image, under mirrored torques, stay mirror images (sliding, one foot unloading).
 TEST(HumanoidContact, MotionsMirrorInTheSagittalPlane) {
@@ -261,12 +245,12 @@ TEST(HumanoidContact, MotionsMirrorInTheSagittalPlane) {
   tau << 20.0, -10.0, 30.0, 5.0, -15.0, 25.0, -20.0, 8.0;
   JointVector swapped;
   swapped << tau.tail<kJointsPerLeg>(), tau.head<kJointsPerLeg>();
-  State b = mirrored(a);
+  State b = test::mirrored(a);
   for (int k = 0; k < 300; ++k) {
     a = map.step(a, tau, kDt);
     b = map.step(b, swapped, kDt);
   }
-  const State m = mirrored(a);
+  const State m = test::mirrored(a);
   EXPECT_GT(std::abs(a.q[1]), 0.001) << "it moved sideways";
   EXPECT_LT((m.q - b.q).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((m.v - b.v).cwiseAbs().maxCoeff(), 1e-8);

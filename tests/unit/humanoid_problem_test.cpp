@@ -15,6 +15,7 @@
 #include "hmpc/humanoid/problem.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/solver/ilqr.hpp"
+#include "humanoid_mirror.hpp"
 #include "humanoid_test_motions.hpp"
 
 namespace {
@@ -158,6 +159,32 @@ TEST(HumanoidProblem, FootHeightTermFollowsTheGait) {
   const BaseFeatures f = cost.features(lifted);
   EXPECT_GT(f.sole_height[0], 0.02);
   EXPECT_NEAR(cost.residual(to_vector(lifted), 0.12)[14], 2.0 * (f.sole_height[0] - 0.05), 1e-12);
+}
+
+// Without a gait (whose left foot steps first) and with upright targets the cost is left-right
+// symmetric, like the plant (HumanoidContact.MotionsMirrorInTheSagittalPlane): a lopsided
+// state and its mirror image cost the same. Not so with VI's yaw target of pi: Eq. 4.25's
+// quaternion difference tells q from -q, and the mirror image of (0, 0, 0, 1) is
+// (0, 0, 0, -1), so the half turn costs less one way round than the other.
+TEST(HumanoidProblem, CostIsMirrorSymmetric) {
+  const Motion m = test::motion("V-low-jump");
+  ASSERT_EQ(m.gait.period, 0.0);
+  const ProblemConfig config;
+  const StateCost cost(m, standing(), config);
+  State x = standing();
+  x.q.segment<4>(3) = Eigen::Vector4d(1.0, 0.1, 0.2, 0.3).normalized();
+  x.q[7 + kHipAbduction] = 0.2;
+  x.q[7 + kJointsPerLeg + kKnee] = 0.5;
+  x.q[7 + kJointsPerLeg + kAnkle] = -0.2;
+  x.v << 0.3, -0.2, 0.5, 1.0, 0.4, -0.3, 1.0, -2.0, 0.5, 0.0, 0.3, 0.1, -0.4, 0.2;
+  for (const double t : {0.0, 0.5, 1.0}) {
+    const double a = cost.value(to_vector(x), t), b = cost.value(to_vector(test::mirrored(x)), t);
+    EXPECT_GT(a, 1.0);
+    EXPECT_NEAR(a, b, 1e-12 * a) << "at t = " << t;
+  }
+  const StateCost half_turn(test::motion("VI-half-turn-jump"), standing(), config);
+  const double a = half_turn.value(to_vector(x), 1.0), b = half_turn.value(to_vector(test::mirrored(x)), 1.0);
+  EXPECT_GT(std::abs(a - b), 0.1 * a);
 }
 
 TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) {
