@@ -105,30 +105,29 @@ void simbody_forward(benchmark::State& state) {
     benchmark::DoNotOptimize(sim.forward_dynamics(s.tau));
   });
 }
-// d(qddot)/d(q, v, tau_joints) by forward differences of `forward(q, v, tau)`.
-using ForwardJacobian = Eigen::Matrix<double, kDofs, kConfigurationSize + kDofs + kJoints>;
+// d(qddot)/d(q, v, tau_joints) by forward differences of `forward(q, v, tau)`, over the stacked
+// point (q, v, tau_joints); the quaternion is renormalised at every point.
+constexpr int kPoint = kConfigurationSize + kDofs + kJoints;
+using ForwardJacobian = Eigen::Matrix<double, kDofs, kPoint>;
 template <class Forward>
 ForwardJacobian forward_jacobian(const Sample& s, Forward forward) {
-  ForwardJacobian J;
-  const Velocity a = forward(s.q, s.v, s.tau);
-  for (int i = 0; i < kConfigurationSize; ++i) {
-    const double d = hmpc::detail::fd_step(s.q[i], 0.5);
-    Configuration q = s.q;
-    q[i] += d;
+  using Point = Eigen::Matrix<double, kPoint, 1>;
+  const auto at = [&](const Point& p) {
+    Configuration q = p.head<kConfigurationSize>();
     q.segment<4>(3).normalize();
-    J.col(i) = (forward(q, s.v, s.tau) - a) / d;
-  }
-  for (int i = 0; i < kDofs; ++i) {
-    const double d = hmpc::detail::fd_step(s.v[i], 0.5);
-    Velocity v = s.v;
-    v[i] += d;
-    J.col(kConfigurationSize + i) = (forward(s.q, v, s.tau) - a) / d;
-  }
-  for (int j = 0; j < kJoints; ++j) {
-    const double d = hmpc::detail::fd_step(s.tau[kBaseDofs + j], 0.5);
-    Velocity tau = s.tau;
-    tau[kBaseDofs + j] += d;
-    J.col(kConfigurationSize + kDofs + j) = (forward(s.q, s.v, tau) - a) / d;
+    Velocity tau = Velocity::Zero();
+    tau.tail<kJoints>() = p.tail<kJoints>();
+    return forward(q, p.segment<kDofs>(kConfigurationSize), tau);
+  };
+  Point x;
+  x << s.q, s.v, s.tau.tail<kJoints>();
+  const Velocity a = at(x);
+  ForwardJacobian J;
+  for (int i = 0; i < kPoint; ++i) {
+    const double d = hmpc::detail::fd_step(x[i], 0.5);
+    Point p = x;
+    p[i] += d;
+    J.col(i) = (at(p) - a) / d;
   }
   return J;
 }

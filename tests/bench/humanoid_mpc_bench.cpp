@@ -18,6 +18,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -95,11 +96,16 @@ class Recorder : public benchmark::ConsoleReporter {
   }
 };
 
-// One closed-loop run's summary and outcome: its physical check, and for a reaching motion (on
-// the robot with an arm) the hand's closest approach and when it came within 5 cm.
+// One closed-loop run: its summary, when it fell (or -1), and its outcome: its physical check,
+// and for a reaching motion (on the robot with an arm) the hand's closest approach and when it
+// came within 5 cm.
+struct RunResult {
+  ClosedLoopSummary summary;
+  double fell_at = -1.0;
+  std::string outcome;
+};
 template <int A>
-std::pair<ClosedLoopSummary, std::string> run_once(const std::string& file, const Motion& motion,
-                                                   const ClosedLoopConfig& config) {
+RunResult run_once(const std::string& file, const Motion& motion, const ClosedLoopConfig& config) {
   const BasicClosedLoopRun<A> run = run_closed_loop<A>(motion, config);
   const ClosedLoopSummary s = summarise(run);
   char outcome[160];
@@ -115,7 +121,10 @@ std::pair<ClosedLoopSummary, std::string> run_once(const std::string& file, cons
     std::snprintf(outcome, sizeof outcome, "check %s, base %.2f-%.2f m", check.passed ? "passed" : "FAILED",
                   s.min_height, s.max_height);
   }
-  return {s, outcome};
+  return {s, run.fell_at, outcome};
+}
+RunResult run_once(const std::string& file, const Motion& motion, const ClosedLoopConfig& config) {
+  return motion.reach.active ? run_once<1>(file, motion, config) : run_once<0>(file, motion, config);
 }
 
 // Coarse-Fast MPC on motion V, untruncated (so both runs do the same iterations), 2 threads,
@@ -156,7 +165,10 @@ std::string brief(const std::string& outcome) { return outcome.substr(0, outcome
 // outcome) and untruncated, the setting of the thesis's Fig. 2.10 cost comparison ("we did
 // not truncate the MPC computations", Sec. 2.6.3), which also makes the cost repeatable: an
 // untruncated run does the same iterations on any machine load and thread count.
-void closed_loop(const std::vector<std::string>& motions, int threads, Linearisation linearisation) {
+// Returns the warm-started untruncated runs, per motion and MPC kind: the at-rest start of
+// cost_over_starts().
+using AtRest = std::map<std::string, std::array<RunResult, kMpcKinds>>;
+AtRest closed_loop(const std::vector<std::string>& motions, int threads, Linearisation linearisation) {
   std::printf("\nClosed loop (closed_loop.hpp): 30 ms sampling, 1 ms simulator, iLQR cap %d, tol %.0e "
               "(reaching: %d, %.1f), %d thread%s, %s linearisation; timings and the first outcome with "
               "solves truncated at 30 ms, cost/Fine both truncated and untruncated (Fig. 2.10's setting)\n",
@@ -166,13 +178,13 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
               "max [ms]", "med [ms]", ">30ms", "iters", "trunc", "cost", "cost/Fine", "outcome", "untrunc.",
               "cost/Fine", "outcome untruncated");
   int below_coarse[2] = {0, 0}, within_fine[2] = {0, 0}, compared[2] = {0, 0};  // [cold, warm]
+  AtRest at_rest;
   for (const std::string& file : motions) {
     const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
     for (const bool warm : {true, false}) {
       double fine_cost[2] = {0.0, 0.0}, coarse_cost = 0.0;
-      std::string detail[kMpcKinds];
       for (int kind = 0; kind < kMpcKinds; ++kind) {
-        std::pair<ClosedLoopSummary, std::string> run[2];
+        RunResult run[2];
         for (const bool truncate : {true, false}) {
           ClosedLoopConfig config;
           config.mpc = static_cast<MpcKind>(kind);
@@ -180,11 +192,10 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
           config.threads = threads;
           config.truncate = truncate;
           config.problem.linearisation = linearisation;
-          run[truncate ? 0 : 1] = motion.reach.active ? run_once<1>(file, motion, config)
-                                                      : run_once<0>(file, motion, config);
+          run[truncate ? 0 : 1] = run_once(file, motion, config);
         }
-        const ClosedLoopSummary& s = run[0].first;
-        const double untruncated = run[1].first.total_cost;
+        const ClosedLoopSummary& s = run[0].summary;
+        const double untruncated = run[1].summary.total_cost;
         const auto mpc = static_cast<MpcKind>(kind);
         if (mpc == MpcKind::kFine) {
           fine_cost[0] = s.total_cost;
@@ -199,16 +210,13 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
         std::printf("%-18s %-11s %-4s %8.1f %8.1f %5d %5.2f %5d %9.1f %9.3f %-16s| %9.1f %9.3f %s\n",
                     file.c_str(), name_of(mpc), warm ? "yes" : "no", s.max_solve_ms, s.median_solve_ms,
                     s.overruns, s.mean_iterations, s.truncated, s.total_cost,
-                    fine_cost[0] > 0.0 ? s.total_cost / fine_cost[0] : 0.0, brief(run[0].second).c_str(),
+                    fine_cost[0] > 0.0 ? s.total_cost / fine_cost[0] : 0.0, brief(run[0].outcome).c_str(),
                     untruncated, fine_cost[1] > 0.0 ? untruncated / fine_cost[1] : 0.0,
-                    brief(run[1].second).c_str());
-        detail[kind] = run[0].second;
-      }
-      for (int kind = 0; kind < kMpcKinds && motion.reach.active; ++kind) {
-        {
-          std::printf("    %s %s, truncated: %s\n", name_of(static_cast<MpcKind>(kind)), warm ? "warm" : "cold",
-                      detail[kind].c_str());
+                    brief(run[1].outcome).c_str());
+        if (motion.reach.active) {
+          std::printf("    %s %s, truncated: %s\n", name_of(mpc), warm ? "warm" : "cold", run[0].outcome.c_str());
         }
+        if (warm) at_rest[file][kind] = run[1];
       }
     }
   }
@@ -220,6 +228,7 @@ void closed_loop(const std::vector<std::string>& motions, int threads, Linearisa
                 warm ? "warm-started" : "cold", below_coarse[warm], compared[warm], within_fine[warm],
                 compared[warm]);
   }
+  return at_rest;
 }
 
 // The perturbed starts of the cost comparison: at rest, and the whole robot moving at 0.1 m/s
@@ -239,20 +248,9 @@ const std::vector<Start>& starts() {
   return list;
 }
 
-struct Untruncated {
-  double cost = 0.0;
-  double fell_at = -1.0;  // or -1
-};
-
-template <int A>
-Untruncated run_untruncated(const Motion& motion, const ClosedLoopConfig& config) {
-  const BasicClosedLoopRun<A> run = run_closed_loop<A>(motion, config);
-  return {summarise(run).total_cost, run.fell_at};
-}
-
 // a no worse than b: a fall is worse than standing, a later fall better than an earlier one.
-bool no_worse(const Untruncated& a, const Untruncated& b) {
-  if (a.fell_at < 0.0) return b.fell_at >= 0.0 || a.cost <= b.cost;
+bool no_worse(const RunResult& a, const RunResult& b) {
+  if (a.fell_at < 0.0) return b.fell_at >= 0.0 || a.summary.total_cost <= b.summary.total_cost;
   return b.fell_at >= 0.0 && a.fell_at >= b.fell_at;
 }
 
@@ -265,8 +263,9 @@ double median(std::vector<double> v) {
 // Fig. 2.10 analogue over the perturbed starts: every motion under the three warm-started MPCs,
 // untruncated, from each start. Per MPC the median over starts of cost/Fine (starts where
 // both runs stood to the end) and the falls; and on how many starts Coarse-Fast's cost was at
-// or below Coarse's.
-void cost_over_starts(const std::vector<std::string>& motions, int threads, Linearisation linearisation) {
+// or below Coarse's. The at-rest runs are closed_loop()'s.
+void cost_over_starts(const std::vector<std::string>& motions, const AtRest& at_rest, int threads,
+                      Linearisation linearisation) {
   std::printf("\nFig. 2.10 analogue: warm-started, untruncated, %zu starts (at rest; moving 0.1 m/s forward, back, "
               "left, right); cost/Fine: median over the starts where both stood\n",
               starts().size());
@@ -279,23 +278,28 @@ void cost_over_starts(const std::vector<std::string>& motions, int threads, Line
     int falls[kMpcKinds] = {0, 0, 0}, no_worse_than_coarse = 0;
     std::string per_start;
     for (const Start& start : starts()) {
-      Untruncated r[kMpcKinds];
+      std::array<RunResult, kMpcKinds> r;
       for (int kind = 0; kind < kMpcKinds; ++kind) {
-        ClosedLoopConfig config;
-        config.mpc = static_cast<MpcKind>(kind);
-        config.truncate = false;
-        config.threads = threads;
-        config.initial_velocity = start.velocity;
-        config.problem.linearisation = linearisation;
-        r[kind] = motion.reach.active ? run_untruncated<1>(motion, config) : run_untruncated<0>(motion, config);
+        if (start.velocity.isZero()) {
+          r[kind] = at_rest.at(file)[kind];
+        } else {
+          ClosedLoopConfig config;
+          config.mpc = static_cast<MpcKind>(kind);
+          config.truncate = false;
+          config.threads = threads;
+          config.initial_velocity = start.velocity;
+          config.problem.linearisation = linearisation;
+          r[kind] = run_once(file, motion, config);
+        }
         falls[kind] += r[kind].fell_at >= 0.0 ? 1 : 0;
       }
-      const Untruncated& fine = r[static_cast<int>(MpcKind::kFine)];
+      const RunResult& fine = r[static_cast<int>(MpcKind::kFine)];
       char text[64];
       double shown[2] = {0.0, 0.0};
       for (const MpcKind kind : {MpcKind::kCoarse, MpcKind::kCoarseFast}) {
-        const Untruncated& x = r[static_cast<int>(kind)];
-        const double value = fine.fell_at < 0.0 && x.fell_at < 0.0 ? x.cost / fine.cost : 0.0;
+        const RunResult& x = r[static_cast<int>(kind)];
+        const double value =
+            fine.fell_at < 0.0 && x.fell_at < 0.0 ? x.summary.total_cost / fine.summary.total_cost : 0.0;
         if (value > 0.0) ratio[static_cast<int>(kind)].push_back(value);
         shown[kind == MpcKind::kCoarse ? 0 : 1] = value;
       }
@@ -383,8 +387,8 @@ int main(int argc, char** argv) {
   }
   if (run_closed_loop) {
     if (threads > 1) line_search_lanes();
-    closed_loop(motions, threads, linearisation);
-    cost_over_starts(motions, threads, linearisation);
+    const AtRest at_rest = closed_loop(motions, threads, linearisation);
+    cost_over_starts(motions, at_rest, threads, linearisation);
   }
   return 0;
 }

@@ -12,8 +12,8 @@
 
 #include "hmpc/humanoid/contact.hpp"
 #include "hmpc/humanoid/step.hpp"
-#include "humanoid_mirror.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
+#include "humanoid_mirror.hpp"
 
 namespace {
 
@@ -231,7 +231,6 @@ TEST(HumanoidContact, SlidesAboveLimit) {
   EXPECT_GT(result.sole_load, 0.5 * result.weight);
 }
 
-// (d) Extreme states: finite forces inside the friction cone, finite steps.
 // The body, its joints and its contacts are left-right symmetric: a lopsided motion and its
 // mirror image, under mirrored torques, stay mirror images (sliding, one foot unloading).
 TEST(HumanoidContact, MotionsMirrorInTheSagittalPlane) {
@@ -256,6 +255,7 @@ TEST(HumanoidContact, MotionsMirrorInTheSagittalPlane) {
   EXPECT_LT((m.v - b.v).cwiseAbs().maxCoeff(), 1e-8);
 }
 
+// (d) Extreme states: finite forces inside the friction cone, finite steps.
 TEST(HumanoidContact, FiniteAtExtremeStates) {
   StepMap map;
   const ContactModel& contact = map.contact_model();
