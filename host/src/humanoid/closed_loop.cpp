@@ -7,6 +7,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "hmpc/mpc/deadline_stop.hpp"
 #include "hmpc/mpc/receding_horizon_mpc.hpp"
 
 namespace hmpc::humanoid {
@@ -69,33 +70,6 @@ double lowest_non_foot_point(const BasicDynamics<A>& dynamics, const BasicState<
   return lowest;
 }
 
-// The truncation (ClosedLoopConfig::truncate): called before each iteration of a layer, it
-// stops the solve when the layer's longest iteration so far in this update would no longer
-// end before the deadline, so that a solve ends within its time instead of overrunning it by
-// its last iteration. A layer's first iteration runs if it starts before the deadline. An
-// iteration longer than predicted (its line search backtracking further than any before)
-// is cut short between rollouts once the hard deadline, the end of the sampling period, has
-// passed (expired(), ilqr.hpp): Coarse-Fast's upper layer may overrun its share of the period
-// into the lower layer's, as before, but no layer the period.
-class DeadlineStop {
- public:
-  DeadlineStop(Clock::time_point deadline, Clock::time_point hard_deadline, bool enabled)
-      : deadline_(deadline), hard_deadline_(hard_deadline), enabled_(enabled) {}
-  bool operator()() {
-    const Clock::time_point now = Clock::now();
-    if (started_) longest_ = std::max(longest_, now - last_);
-    started_ = true;
-    last_ = now;
-    return enabled_ && now + longest_ >= deadline_;
-  }
-  bool expired() const { return enabled_ && Clock::now() >= hard_deadline_; }
-
- private:
-  Clock::time_point deadline_, hard_deadline_, last_{};
-  Clock::duration longest_{0};
-  bool enabled_, started_ = false;
-};
-
 // A fraction of the sampling period as a clock duration.
 Clock::duration period(double fraction) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(fraction * kSamplingPeriod));
@@ -108,17 +82,26 @@ Clock::duration period(double fraction) {
 // loaded machine and motion IV fell, so it gets 3/4.
 constexpr double kUpperShare = 0.75;
 
-// One update within the sampling period. Coarse-Fast: the upper layer until kUpperShare of the
-// period, the lower layer until its end.
+// Each layer's iteration time, carried from one update to the next (deadline_stop.hpp); a
+// single-layer MPC uses `upper`.
+struct LayerTimes {
+  IterationTime<Clock> upper, fast;
+};
+
+// One update within the sampling period, truncated (ClosedLoopConfig::truncate) by
+// deadline_stop.hpp's rule. Coarse-Fast: the upper layer until kUpperShare of the period, the
+// lower layer until its end.
 template <class Mpc, int A>
-void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate) {
-  DeadlineStop stop(start + period(1.0), start + period(1.0), truncate);
+void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate, LayerTimes& times) {
+  DeadlineStop<Clock> stop(start + period(1.0), start + period(1.0), times.upper, truncate);
   mpc.update(to_vector(x), stop);
 }
 template <int A>
-void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate) {
+void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate,
+            LayerTimes& times) {
   const Clock::time_point end = start + period(1.0);
-  DeadlineStop upper(start + period(kUpperShare), end, truncate), fast(end, end, truncate);
+  DeadlineStop<Clock> upper(start + period(kUpperShare), end, times.upper, truncate);
+  DeadlineStop<Clock> fast(end, end, times.fast, truncate);
   mpc.update(to_vector(x), upper, fast);
 }
 
@@ -151,11 +134,12 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   const int count = static_cast<int>(duration / kSamplingPeriod + 0.5);
   run.samples.reserve(count);
   State x = initial;
+  LayerTimes times;
   for (int k = 0; k < count; ++k) {
     const double t0 = k * kSamplingPeriod;
     problem_of(mpc).set_start_time(t0);
     const auto start = Clock::now();
-    update(mpc, x, start, config.truncate);
+    update(mpc, x, start, config.truncate, times);
     BasicClosedLoopSample<A> sample;
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);
