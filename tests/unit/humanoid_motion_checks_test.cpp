@@ -1,4 +1,4 @@
-// The physical checks of issue 5 for the humanoid's dynamic motions (II, IV-VIII), whole-body
+// The physical checks of issue 5 for the humanoid's dynamic motions (II-VIII), whole-body
 // reaching with the robot with an arm, and a push recovery, each a closed-loop run under Coarse-Fast MPC (closed_loop.hpp), untruncated
 // (test::run). Label long: minutes under AddressSanitizer, which CI's host-asan preset skips;
 // host-release runs them.
@@ -39,6 +39,12 @@ TEST(HumanoidMotionChecks, CoarseFastSitsOnTheChairAndStandsUp) {
 // target, with at least four touchdowns, alternating.
 TEST(HumanoidMotionChecks, CoarseFastWalks) {
   expect_check_passes("II-walking");
+}
+
+// Motion III (issue 5's check): motion II's checks at III's 2 m/s, and flight phases: at
+// least 3 samples (90 ms) with both feet unloaded.
+TEST(HumanoidMotionChecks, CoarseFastRuns) {
+  expect_check_passes("III-running");
 }
 
 // Motion V (issue 5's check): a flight phase with both feet unloaded for at least 60 ms, then

@@ -230,6 +230,24 @@ TEST(HumanoidMotion, ReachingAndTheRobotMustMatch) {
   EXPECT_NO_THROW(BasicStateCost<1>(parse(kReach), standing_state<1>(config, 0.85), config));
 }
 
+// The optional model sub-step: left out, the MPC's model keeps ProblemConfig's; given, the
+// MPC's model (model_config) uses it, and nothing else changes.
+TEST(HumanoidMotion, ModelSubstepIsOptionalAndReachesTheMpcModel) {
+  const ProblemConfig defaults;
+  const Motion plain = parse(kValid);
+  EXPECT_EQ(plain.model_substep, 0.0);
+  EXPECT_EQ(model_config(plain, defaults).max_substep, defaults.max_substep);
+  const Motion fine = parse(replace(kValid, "gait = none", "gait = none\nmodel_substep = 0.001"));
+  EXPECT_DOUBLE_EQ(fine.model_substep, 0.001);
+  const ProblemConfig model = model_config(fine, defaults);
+  EXPECT_DOUBLE_EQ(model.max_substep, 0.001);
+  EXPECT_EQ(model.step, defaults.step);
+  EXPECT_EQ(model.contact.stiffness, defaults.contact.stiffness);
+  const Motion chair = parse(replace(kValid, "chair = none", "chair = 0.5 -0.6 -0.1"));
+  EXPECT_TRUE(model_config(chair, defaults).contact.chair);
+  EXPECT_DOUBLE_EQ(model_config(chair, defaults).contact.seat_height, 0.5);
+}
+
 TEST(HumanoidMotion, GaitSwingsTheFeetInTurn) {
   const Gait gait{0.6, 0.05, 0.4};  // each foot swings 0.24 s of each 0.6 s stride
   // Left foot: swings over [0, 0.24) of each period, at its apex half-way.
@@ -272,6 +290,10 @@ TEST(HumanoidMotion, RejectsBadFilesNamingFileLineAndKey) {
       {"bad chair", replace(kValid, "chair = none", "chair = 0.5 0.2 0.1"), "test.motion:5: chair: expected"},
       {"bad gait", replace(kValid, "gait = none", "gait = 0.6 0.05 1.5"), "test.motion:6: gait: expected"},
       {"short gait", replace(kValid, "gait = none", "gait = 0.6 0.05"), "test.motion:6: gait: expected 3 numbers"},
+      {"zero model sub-step", replace(kValid, "gait = none", "gait = none\nmodel_substep = 0"),
+       "test.motion:7: model_substep: must be > 0 s and at most 0.01 s"},
+      {"unstable model sub-step", replace(kValid, "gait = none", "gait = none\nmodel_substep = 0.02"),
+       "test.motion:7: model_substep: must be > 0 s and at most 0.01 s"},
       {"bad version", replace(kValid, "hmpc-humanoid-motion 1", "hmpc-humanoid-motion 2"),
        "test.motion:2: expected the version line"},
       {"unknown section", replace(kValid, "[weights]", "[weight]"), "test.motion:7: unknown section [weight]"},

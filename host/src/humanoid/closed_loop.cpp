@@ -21,7 +21,7 @@ template <int N, int A>
 std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N, A>, N>> make_single_layer(
     const Motion& motion, const BasicState<A>& initial, ThreadPool* pool, ProblemConfig config,
     double step) {
-  config.contact = contact_for(motion, config.contact);
+  config = model_config(motion, config);
   config.step = step;
   typename RecedingHorizonMpc<HumanoidProblem<N, A>, N>::Config mpc;
   mpc.solver = layer_solver(motion);

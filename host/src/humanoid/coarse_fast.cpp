@@ -12,7 +12,7 @@ template <int A>
 std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion, const BasicState<A>& initial,
                                                      ThreadPool* pool, ProblemConfig config) {
   using CoarseFast = BasicCoarseFast<A>;
-  config.contact = contact_for(motion, config.contact);
+  config = model_config(motion, config);
   ProblemConfig coarse = config, fast = config;
   coarse.step = kCoarseStep;
   fast.step = kFastStep;

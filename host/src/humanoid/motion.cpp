@@ -14,13 +14,14 @@ constexpr const char* kVersionLine = "hmpc-humanoid-motion 1";
 
 struct KeySpec {
   const char* name;
-  int size;  // numbers in the value
+  int size;               // numbers in the value
+  bool optional = false;  // may be left out
 };
 
 // The keys of each section, with the number of values each takes (motion.hpp).
 const std::map<std::string, std::vector<KeySpec>>& section_keys() {
   static const std::map<std::string, std::vector<KeySpec>> keys{
-      {"motion", {{"duration", 1}, {"chair", 3}, {"gait", 3}}},
+      {"motion", {{"duration", 1}, {"chair", 3}, {"gait", 3}, {"model_substep", 1, true}}},
       {"weights",
        {{"w_HAA", 1}, {"w_HFE", 1}, {"w_KFE", 1}, {"w_AFE", 1}, {"w_q1", 1}, {"w_q2", 1},
         {"w_q3", 1}, {"w_q4", 1}, {"w_height", 1}, {"w_vx", 1}, {"w_vy", 1}, {"w_vz", 1},
@@ -153,7 +154,7 @@ class Reader {
                                                  std::string(kVersionLine) + "'");
     for (const Section& section : sections) {
       for (const KeySpec& spec : section_keys().at(section.name)) {
-        if (section.entries.count(spec.name) == 0)
+        if (!spec.optional && section.entries.count(spec.name) == 0)
           fail(section.line, spec.name, "missing key in [" + section.name + "]");
       }
     }
@@ -246,6 +247,14 @@ Motion parse_motion(std::istream& in, const std::string& source) {
       reader.fail(reader.line_of(m, "gait"), "gait",
                   "expected 'none' or 'period swing_height swing_fraction' with period > 0, "
                   "swing_height > 0 and 0 < swing_fraction <= 1");
+    }
+  }
+
+  if (m.entries.count("model_substep") != 0) {
+    motion.model_substep = reader.scalar(m, "model_substep");
+    if (motion.model_substep <= 0.0 || motion.model_substep > kMaxModelSubstep) {
+      reader.fail(reader.line_of(m, "model_substep"), "model_substep",
+                  "must be > 0 s and at most 0.01 s");
     }
   }
 

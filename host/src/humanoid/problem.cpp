@@ -140,6 +140,12 @@ ContactParameters contact_for(const Motion& motion, ContactParameters contact) {
   return contact;
 }
 
+ProblemConfig model_config(const Motion& motion, ProblemConfig config) {
+  config.contact = contact_for(motion, config.contact);
+  if (motion.model_substep > 0.0) config.max_substep = motion.model_substep;
+  return config;
+}
+
 namespace {
 
 // standing_state() of the biped.

@@ -14,6 +14,8 @@
 //                        from x_min to x_max (world) [m]
 //              gait      `none`, or a stepping schedule (Gait below): period [s], swing
 //                        height [m], swing fraction of the period (0 < fraction <= 1)
+//              model_substep  (optional) the sub-step of the MPC's model [s], 0 < h <= 10 ms;
+//                        without it, ProblemConfig::max_substep's
 //   [weights]  w_HAA w_HFE w_KFE w_AFE   W_control of Eq. 4.24, per joint of each leg
 //              w_q1 w_q2 w_q3 w_q4       W_attitude of Eq. 4.25 (vector part, scalar part)
 //              w_height                  Eq. 4.26
@@ -33,7 +35,7 @@
 //              start     time the reaching term switches on [s] (>= 0)
 //              w_reach   Eq. 2.53's weight
 //              w_SFE     W_control of Eq. 4.24 for the shoulder joint
-// Every key is required exactly once per section; weights are finite and >= 0. Any error
+// Every key but model_substep is required exactly once per section; weights are finite and >= 0. Any error
 // throws MotionFileError naming the file, the line and the key.
 #pragma once
 
@@ -99,8 +101,13 @@ struct Phase {
 // longest schedule (VIII) has six phases.
 constexpr int kMaxPhases = 8;
 
+// The longest model sub-step a motion may ask for: semi-implicit Euler's stability bound
+// omega h < 2 for the stiffest explicit mode, a foot on its soles at 195 rad/s (contact.hpp).
+constexpr double kMaxModelSubstep = 0.01;
+
 struct Motion {
   double duration = 0.0;
+  double model_substep = 0.0;  // [s] the MPC model's sub-step; 0: ProblemConfig's default
   bool chair = false;
   double seat_height = 0.0, seat_x_min = 0.0, seat_x_max = 0.0;  // [m], when `chair`
   Gait gait;  // period 0: none

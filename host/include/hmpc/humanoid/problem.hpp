@@ -276,6 +276,9 @@ class HumanoidProblem
 
 // `contact` with the motion's chair, if it has one.
 ContactParameters contact_for(const Motion& motion, ContactParameters contact = ContactParameters{});
+// The MPC's model of `motion`: `config` with the motion's contact surfaces (contact_for) and,
+// if the motion asks for one, its model sub-step (Motion::model_substep).
+ProblemConfig model_config(const Motion& motion, ProblemConfig config);
 
 // A quiet stance for motion starts: torso upright with its base point at `height`, feet flat
 // and side by side, knees bent as needed (straight if `height` is out of reach), the centre
