@@ -1,6 +1,7 @@
 #include "hmpc/humanoid/motion.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -253,8 +254,9 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   if (m.entries.count("model_substep") != 0) {
     motion.model_substep = reader.scalar(m, "model_substep");
     if (motion.model_substep <= 0.0 || motion.model_substep > kMaxModelSubstep) {
-      reader.fail(reader.line_of(m, "model_substep"), "model_substep",
-                  "must be > 0 s and at most 0.01 s");
+      char bound[64];
+      std::snprintf(bound, sizeof bound, "must be > 0 s and at most %g s", kMaxModelSubstep);
+      reader.fail(reader.line_of(m, "model_substep"), "model_substep", bound);
     }
   }
 

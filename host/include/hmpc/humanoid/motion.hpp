@@ -14,8 +14,8 @@
 //                        from x_min to x_max (world) [m]
 //              gait      `none`, or a stepping schedule (Gait below): period [s], swing
 //                        height [m], swing fraction of the period (0 < fraction <= 1)
-//              model_substep  (optional) the sub-step of the MPC's model [s], 0 < h <= 10 ms;
-//                        without it, ProblemConfig::max_substep's
+//              model_substep  (optional) the sub-step of the MPC's model [s],
+//                        0 < h <= kMaxModelSubstep; without it, ProblemConfig::max_substep's
 //   [weights]  w_HAA w_HFE w_KFE w_AFE   W_control of Eq. 4.24, per joint of each leg
 //              w_q1 w_q2 w_q3 w_q4       W_attitude of Eq. 4.25 (vector part, scalar part)
 //              w_height                  Eq. 4.26
@@ -35,8 +35,8 @@
 //              start     time the reaching term switches on [s] (>= 0)
 //              w_reach   Eq. 2.53's weight
 //              w_SFE     W_control of Eq. 4.24 for the shoulder joint
-// Every key but model_substep is required exactly once per section; weights are finite and >= 0. Any error
-// throws MotionFileError naming the file, the line and the key.
+// Every key but model_substep is required exactly once per section; weights are finite and
+// >= 0. Any error throws MotionFileError naming the file, the line and the key.
 #pragma once
 
 #include <Eigen/Core>
