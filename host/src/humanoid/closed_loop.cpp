@@ -232,6 +232,7 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
 template <int A>
 ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   ClosedLoopSummary s;
+  s.samples = static_cast<int>(run.samples.size());
   if (run.samples.empty()) return s;
   std::vector<double> solve;
   solve.reserve(run.samples.size());

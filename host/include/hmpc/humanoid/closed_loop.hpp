@@ -101,6 +101,7 @@ struct ClosedLoopSummary {
   double mean_iterations = 0.0;
   int truncated = 0, unusable = 0;
   int overruns = 0;  // solves that took longer than the 30 ms sampling period
+  int samples = 0;
   double total_cost = 0.0;
   double min_height = 0.0, max_height = 0.0;
 };
