@@ -82,7 +82,7 @@ Clock::duration period(double fraction) {
 // motion IV fell. Measured over shares, truncated warm runs of III, V, VI, VII and VIII, 12
 // each, interleaved: 0.75 passed 35 of 60 physical checks (VIII 0 of 12: its first upper solve
 // stopped one iteration short with 8 ms of the period unused) and overran 30 ms in 10
-// samples; 0.8 passed 46, 10 samples; 0.85 passed 48, 6 samples; 0.9 (6 each) 26 of 30, 22
+// samples; 0.8 passed 45, 10 samples; 0.85 passed 48, 6 samples; 0.9 (6 each) 26 of 30, 22
 // samples; leaving the lower layer only two of its iterations' time, 25 of 30 and 29 samples.
 // The price is margin on a loaded machine: with a busy process competing for the cores (all
 // motions, warm and cold), 0.85 overran in 34 of 4740 samples, 0.75 in 24 of 4816.
