@@ -93,14 +93,12 @@ typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const State
 }
 
 template <int A>
-void BasicStateCost<A>::derivatives(const StateVector& x, double time, StateVector& lx,
-                                    StateMatrix& lxx) const {
-  constexpr int kStateSize = Dimensions<A>::kStateSize, kResiduals = kCostResiduals<A>;
-  // J = dr/dx by central differences (finite_difference.hpp's) in the entries r depends on:
-  // the base height, quaternion and joint angles, and the torso's velocities. The horizontal
-  // base position (it cancels from the leg angles) and the joint rates do not enter, so their
+void BasicStateCost<A>::residual_jacobian(const StateVector& x, double time, ResidualJacobian& J) const {
+  // Central differences (finite_difference.hpp's step) in the entries r depends on: the base
+  // height, quaternion and joint angles, and the torso's velocities. The horizontal base
+  // position (it cancels from the leg angles) and the joint rates do not enter, so their
   // columns are zero.
-  Eigen::Matrix<double, kResiduals, kStateSize> J = Eigen::Matrix<double, kResiduals, kStateSize>::Zero();
+  J.setZero();
   StateVector xp = x;
   for (int i = 2; i < Dimensions<A>::kConfigurationSize + kBaseDofs; ++i) {
     const double h = detail::fd_step(x[i], 1.0 / 3.0);
@@ -111,6 +109,13 @@ void BasicStateCost<A>::derivatives(const StateVector& x, double time, StateVect
     xp[i] = x[i];
     J.col(i) = (plus - minus) / (2.0 * h);
   }
+}
+
+template <int A>
+void BasicStateCost<A>::derivatives(const StateVector& x, double time, StateVector& lx,
+                                    StateMatrix& lxx) const {
+  ResidualJacobian J;
+  residual_jacobian(x, time, J);
   const CostResidual r = residual(x, time);
   lx.noalias() = 2.0 * J.transpose() * r;
   lxx.noalias() = 2.0 * J.transpose() * J;

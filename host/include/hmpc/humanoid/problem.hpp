@@ -132,6 +132,9 @@ class BasicStateCost {
   BaseFeatures features(const State& x) const;
   CostResidual residual(const StateVector& x, double time) const;
   double value(const StateVector& x, double time) const { return residual(x, time).squaredNorm(); }
+  using ResidualJacobian = Eigen::Matrix<double, kCostResiduals<ArmJoints>, Dimensions<ArmJoints>::kStateSize>;
+  // J = dr/dx by central differences (the residual's entries, in the file comment's terms).
+  void residual_jacobian(const StateVector& x, double time, ResidualJacobian& J) const;
   // Gauss-Newton gradient and Hessian of value() (see the file comment).
   void derivatives(const StateVector& x, double time, StateVector& lx, StateMatrix& lxx) const;
   // tau' W_control tau, Eq. 4.24.

@@ -1,0 +1,270 @@
+#include "hmpc/ioc/local_ioc.hpp"
+
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace hmpc::ioc {
+
+using humanoid::kJoints;
+using humanoid::kStateSize;
+using StateVector = humanoid::StateVector;
+using StateMatrix = humanoid::StateMatrix;
+using JointVector = humanoid::JointVector;
+using JointMatrix = Eigen::Matrix<double, kJoints, kJoints>;
+using JointStateMatrix = Eigen::Matrix<double, kJoints, kStateSize>;
+
+// The backward pass's value function and, per estimated weight, its derivative.
+struct LocalIoc::Workspace {
+  StateVector V_x;
+  StateMatrix V_xx;
+  std::array<StateVector, kWeightCount> dV_x;
+  std::array<StateMatrix, kWeightCount> dV_xx;
+};
+
+namespace {
+
+// Residual rows of BasicStateCost::residual (problem.hpp) and the weight each is the square
+// root of: attitude x, y, z, w; height; velocity x, y, z; alpha; beta right, left; angular
+// velocity x, y, z; foot heights (4). -1: a weight that is not estimated.
+std::array<int, kResiduals> feature_map() {
+  std::array<int, kResiduals> map;
+  map.fill(-1);
+  map[0] = kQ1;
+  map[1] = kQ2;
+  map[2] = kQ3;
+  map[4] = kHeight;
+  map[5] = kVx;
+  map[6] = kVy;
+  map[7] = kVz;
+  map[8] = kAlpha;
+  map[9] = kBeta;
+  map[10] = kBeta;
+  return map;
+}
+
+void check_demonstration(const Demonstration& demo, std::size_t index) {
+  const std::string name = "demonstration " + std::to_string(index);
+  if (demo.states.size() != demo.inputs.size() + 1) {
+    throw std::invalid_argument(name + ": " + std::to_string(demo.states.size()) + " states for " +
+                                std::to_string(demo.inputs.size()) + " inputs (needs inputs + 1)");
+  }
+  if (!std::isfinite(demo.start_time)) throw std::invalid_argument(name + ": start time not finite");
+  for (std::size_t k = 0; k < demo.states.size(); ++k) {
+    if (!demo.states[k].allFinite()) {
+      throw std::invalid_argument(name + ": state " + std::to_string(k) + " not finite");
+    }
+  }
+  for (std::size_t k = 0; k < demo.inputs.size(); ++k) {
+    if (!demo.inputs[k].allFinite()) {
+      throw std::invalid_argument(name + ": input " + std::to_string(k) + " not finite");
+    }
+  }
+}
+
+}  // namespace
+
+Demonstration demonstration_of(const humanoid::ClosedLoopRun& run) {
+  Demonstration demo;
+  demo.states.push_back(humanoid::to_vector(run.initial));
+  for (const humanoid::ClosedLoopSample& sample : run.samples) {
+    demo.inputs.push_back(sample.torque);
+    demo.states.push_back(humanoid::to_vector(sample.state));
+  }
+  return demo;
+}
+
+LocalIoc::LocalIoc(const humanoid::Motion& motion, const std::vector<Demonstration>& demonstrations,
+                   humanoid::ThreadPool* pool, humanoid::ProblemConfig config)
+    : feature_of_row_(feature_map()), pool_(pool) {
+  struct Source {
+    const Demonstration* demo;
+    int first;  // index of the window's x_1 in the demonstration
+  };
+  std::vector<Source> sources;
+  for (std::size_t d = 0; d < demonstrations.size(); ++d) {
+    check_demonstration(demonstrations[d], d);
+    const int steps = static_cast<int>(demonstrations[d].inputs.size());
+    for (int first = 0; first + kWindowSteps <= steps; first += kWindowSteps) {
+      sources.push_back({&demonstrations[d], first});
+    }
+  }
+  windows_.resize(sources.size());
+
+  // The estimated weights' rows unweighted (weight 1), the fixed ones as the motion has them.
+  humanoid::Motion unit = motion;
+  unit.weights = with_weights(motion.weights, Weights::Ones());
+  config = humanoid::model_config(motion, config);
+  config.step = humanoid::kCoarseStep;
+  const humanoid::Model model(config.parameters);
+  const JointVector limit = model.torque_limit;
+
+  const int lanes = pool == nullptr ? 1 : pool->threads();
+  using Problem = humanoid::HumanoidProblem<kWindowSteps>;
+  // Eq. 4.29's beta^init from the state every motion starts in (closed_loop.hpp), as in the
+  // MPC that generates with the learned weights.
+  const humanoid::State start = humanoid::standing_state(config, humanoid::kStartHeight);
+  std::vector<std::unique_ptr<Problem>> problems;  // one per lane: a problem's step maps are scratch
+  for (int lane = 0; lane < lanes; ++lane) problems.push_back(std::make_unique<Problem>(unit, start, config));
+  const int count = static_cast<int>(sources.size());
+  humanoid::run_on(pool, lanes, [&](int lane) {
+    Problem& problem = *problems[lane];
+    for (int m = lane; m < count; m += lanes) {
+      const Source& source = sources[m];
+      Window& window = windows_[m];
+      problem.set_start_time(source.demo->start_time + source.first * humanoid::kCoarseStep);
+      for (int t = 0; t < kWindowSteps; ++t) {
+        const StateVector& x = source.demo->states[source.first + t];
+        const JointVector& u = source.demo->inputs[source.first + t];
+        window.inputs[t] = u;
+        problem.dynamics_derivatives(x, u, t, window.A[t], window.B[t]);
+        for (int j = 0; j < kJoints; ++j) {
+          // At the limit to round-off: a clamped input, not an optimum's free one.
+          window.free[t][j] = std::abs(u[j]) < limit[j] * (1.0 - 1e-9);
+          if (!window.free[t][j]) window.B[t].col(j).setZero();
+        }
+        const StateVector& next = source.demo->states[source.first + t + 1];
+        problem.cost().residual_jacobian(next, problem.time_of(t + 1), window.J[t]);
+        window.residual[t] = problem.cost().residual(next, problem.time_of(t + 1));
+      }
+    }
+  });
+
+  lanes_.resize(lanes);
+  values_.resize(windows_.size());
+  gradients_.resize(windows_.size());
+}
+
+LocalIoc::~LocalIoc() = default;
+
+double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, Workspace& work,
+                                       Weights& gradient) const {
+  // Row weights: the estimated weight of the row's term, or 1 (the row carries its own).
+  Eigen::Matrix<double, kResiduals, 1> c;
+  for (int r = 0; r < kResiduals; ++r) c[r] = feature_of_row_[r] < 0 ? 1.0 : w[feature_of_row_[r]];
+  // The state cost's l_x, l_xx at x_{t+1} (Gauss-Newton), and the derivative in each weight:
+  // row r of weight k contributes 2 r J_r' and 2 J_r' J_r.
+  const auto add_state_cost = [&](int t, StateVector& l_x, StateMatrix& l_xx,
+                                  std::array<StateVector, kWeightCount>& dl_x,
+                                  std::array<StateMatrix, kWeightCount>& dl_xx) {
+    const auto& J = window.J[t];
+    const auto& r = window.residual[t];
+    l_x.noalias() += J.transpose() * (2.0 * c.cwiseProduct(r));
+    l_xx.noalias() += J.transpose() * (2.0 * c).asDiagonal() * J;
+    for (int row = 0; row < kResiduals; ++row) {
+      const int k = feature_of_row_[row];
+      if (k < 0) continue;
+      dl_x[k].noalias() += 2.0 * r[row] * J.row(row).transpose();
+      dl_xx[k].noalias() += 2.0 * J.row(row).transpose() * J.row(row);
+    }
+  };
+
+  // V = l_f at x_{N+1}.
+  work.V_x.setZero();
+  work.V_xx.setZero();
+  for (int k = 0; k < kWeightCount; ++k) {
+    work.dV_x[k].setZero();
+    work.dV_xx[k].setZero();
+  }
+  add_state_cost(kWindowSteps - 1, work.V_x, work.V_xx, work.dV_x, work.dV_xx);
+
+  constexpr double kLog2Pi = 1.8378770664093453;
+  double value = 0.0;
+  gradient.setZero();
+  for (int t = kWindowSteps - 1; t >= 0; --t) {
+    const humanoid::StepJacobian& A = window.A[t];
+    const humanoid::StepControlJacobian& B = window.B[t];
+    const JointVector& u = window.inputs[t];
+    // Control cost u' W_control u (Eq. 4.24) on the free inputs; a limited input is decoupled
+    // with a unit pivot (its B column is zero), adding nothing to the value or the gradient.
+    JointVector l_u = JointVector::Zero(), l_uu = JointVector::Ones();
+    int free = 0;
+    for (int j = 0; j < kJoints; ++j) {
+      if (!window.free[t][j]) continue;
+      const double wc = w[kHAA + j % humanoid::kJointsPerLeg];
+      l_u[j] = 2.0 * wc * u[j];
+      l_uu[j] = 2.0 * wc;
+      ++free;
+    }
+    const Eigen::Matrix<double, kStateSize, kJoints> VB = work.V_xx * B;
+    const JointVector Q_u = l_u + B.transpose() * work.V_x;
+    const JointMatrix Q_uu = JointMatrix(l_uu.asDiagonal()) + B.transpose() * VB;
+    const JointStateMatrix Q_ux = VB.transpose() * A;
+    const Eigen::LLT<JointMatrix> llt(Q_uu);
+    // Positive definite in exact arithmetic (see the header); round-off in V_xx across a
+    // landing can still break it at extreme weights: the likelihood is then -infinity, which
+    // the learner's line search backs away from.
+    if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
+    const JointVector k_ff = llt.solve(Q_u);         // k = Q_uu^-1 Q_u
+    const JointStateMatrix K = llt.solve(Q_ux);      // K = Q_uu^-1 Q_ux
+    const JointMatrix Q_uu_inverse = llt.solve(JointMatrix::Identity());
+    value += -0.5 * Q_u.dot(k_ff) + llt.matrixLLT().diagonal().array().log().sum() - 0.5 * free * kLog2Pi;
+
+    // Q_x, Q_xx with the state cost at x_t (none at x_1: it does not depend on the inputs).
+    StateVector Q_x = A.transpose() * work.V_x;
+    StateMatrix Q_xx = A.transpose() * work.V_xx * A;
+    std::array<StateVector, kWeightCount> dl_x;
+    std::array<StateMatrix, kWeightCount> dl_xx;
+    for (int k = 0; k < kWeightCount; ++k) {
+      dl_x[k].setZero();
+      dl_xx[k].setZero();
+    }
+    if (t > 0) add_state_cost(t - 1, Q_x, Q_xx, dl_x, dl_xx);
+
+    for (int k = 0; k < kWeightCount; ++k) {
+      // dl_u, dl_uu of a control weight: 2 u_j and 2 on its free joints.
+      JointVector dl_u = JointVector::Zero(), dl_uu = JointVector::Zero();
+      if (k < kControlWeights) {
+        for (int j = 0; j < kJoints; ++j) {
+          if (window.free[t][j] && j % humanoid::kJointsPerLeg == k) {
+            dl_u[j] = 2.0 * u[j];
+            dl_uu[j] = 2.0;
+          }
+        }
+      }
+      const Eigen::Matrix<double, kStateSize, kJoints> dVB = work.dV_xx[k] * B;
+      const JointVector dQ_u = dl_u + B.transpose() * work.dV_x[k];
+      const JointMatrix dQ_uu = JointMatrix(dl_uu.asDiagonal()) + B.transpose() * dVB;
+      const JointStateMatrix dQ_ux = dVB.transpose() * A;
+      gradient[k] += -dQ_u.dot(k_ff) + 0.5 * k_ff.dot(dQ_uu * k_ff) + 0.5 * (Q_uu_inverse.cwiseProduct(dQ_uu)).sum();
+      if (t == 0) continue;  // V at x_1 is not needed
+      const StateVector dQ_x = dl_x[k] + A.transpose() * work.dV_x[k];
+      const StateMatrix dQ_xx = dl_xx[k] + A.transpose() * work.dV_xx[k] * A;
+      const JointStateMatrix dQ_uu_K = dQ_uu * K;
+      work.dV_x[k] = dQ_x - dQ_ux.transpose() * k_ff - K.transpose() * dQ_u + K.transpose() * (dQ_uu * k_ff);
+      work.dV_xx[k] = dQ_xx - dQ_ux.transpose() * K - K.transpose() * dQ_ux + K.transpose() * dQ_uu_K;
+    }
+    if (t == 0) break;
+    work.V_x = Q_x - Q_ux.transpose() * k_ff;
+    work.V_xx = Q_xx - Q_ux.transpose() * K;
+    work.V_xx = 0.5 * (work.V_xx + work.V_xx.transpose()).eval();  // symmetric despite round-off
+  }
+  return value;
+}
+
+double LocalIoc::log_likelihood(const Weights& w, Weights* gradient) const {
+  if (!(w.array() > 0.0).all() || !w.allFinite()) {
+    throw std::invalid_argument("local IOC: every weight must be positive and finite");
+  }
+  const int lanes = static_cast<int>(lanes_.size());
+  const int count = window_count();
+  humanoid::run_on(pool_, lanes, [&](int lane) {
+    for (int m = lane; m < count; m += lanes) {
+      values_[m] = window_log_likelihood(windows_[m], w, lanes_[lane], gradients_[m]);
+    }
+  });
+  // Summed in window order: the same total on any number of threads.
+  double total = 0.0;
+  Weights sum = Weights::Zero();
+  for (int m = 0; m < count; ++m) {
+    total += values_[m];
+    sum += gradients_[m];
+  }
+  if (gradient != nullptr) *gradient = sum;
+  return total;
+}
+
+}  // namespace hmpc::ioc
