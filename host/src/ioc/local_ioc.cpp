@@ -1,6 +1,5 @@
 #include "hmpc/ioc/local_ioc.hpp"
 
-
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <limits>
