@@ -37,12 +37,6 @@ void usage(std::FILE* out) {
                kFellStatus);
 }
 
-std::string motion_path(const std::string& value) {
-  if (value.find('/') != std::string::npos || value.find(".motion") != std::string::npos) return value;
-  return std::string(HMPC_HUMANOID_MOTIONS) + "/" + value + ".motion";
-}
-
-
 // The run on the biped (A = 0) or, for a reaching motion, the robot with an arm (A = 1).
 template <int A>
 int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const std::string& stem,
@@ -140,12 +134,12 @@ int main(int argc, char** argv) {
 
   Motion motion;
   try {
-    motion = load_motion(motion_path(motion_name));
+    motion = load_motion(motion_path(motion_name, HMPC_HUMANOID_MOTIONS));
   } catch (const MotionFileError& e) {
     std::fprintf(stderr, "hmpc-humanoid: %s\n", e.what());
     return 2;
   }
-  const std::string stem = std::filesystem::path(motion_path(motion_name)).stem().string();
+  const std::string stem = std::filesystem::path(motion_path(motion_name, HMPC_HUMANOID_MOTIONS)).stem().string();
   if (out.empty()) out = "humanoid-" + stem + "-" + name_of(config.mpc);
 
   return motion.reach.active ? run_and_report<1>(motion, config, stem, out, frames)

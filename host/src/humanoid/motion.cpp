@@ -292,6 +292,13 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   return motion;
 }
 
+std::string motion_path(const std::string& name_or_path, const std::string& shipped_dir) {
+  if (name_or_path.find('/') != std::string::npos || name_or_path.find(".motion") != std::string::npos) {
+    return name_or_path;
+  }
+  return shipped_dir + "/" + name_or_path + ".motion";
+}
+
 Motion load_motion(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw MotionFileError(path + ": cannot open the motion file");

@@ -128,6 +128,9 @@ class MotionFileError : public std::runtime_error {
 // Reads a motion file; `source` names it in error messages.
 Motion parse_motion(std::istream& in, const std::string& source);
 Motion load_motion(const std::string& path);
+// A command line's motion: a path (it has a '/' or ends in .motion) as it is, else the name of
+// a file shipped in `shipped_dir` (e.g. "V-low-jump").
+std::string motion_path(const std::string& name_or_path, const std::string& shipped_dir);
 
 // Unit quaternion (w, x, y, z) of the attitude a = (roll phi, pitch theta, yaw xi), rotations
 // counterclockwise about x, y, z (Sec. 2.6.1) composed as R = R_z(xi) R_y(theta) R_x(phi).
