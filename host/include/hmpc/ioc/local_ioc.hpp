@@ -17,7 +17,7 @@
 // drops, so that the value is the log density itself.
 //
 // This recursion is Levine & Koltun's whole-trajectory form -1/2 g' H^-1 g + 1/2 log |H| with
-// H factorised block by block from the last step (their Sec. 4); we use the recursion because
+// H factorised block by block from the last step; we use the recursion because
 // the whole-trajectory H is not usable in floating point here: the open-loop sensitivity of
 // late states to early torques grows so fast through the contacts that H's eigenvalues on a
 // jump window spanned 1e-3 to 8e14 and its Cholesky factorisation failed, while every Q_uu of
@@ -32,6 +32,7 @@
 // backward pass itself (Eqs. 4.16-4.20) propagates open-loop products of A, and across a
 // landing that lost every digit (measured on a jump window: -4014 against 1.72 by
 // differences; 1.7203 by this pass, 1.7203 by differences in long double).
+//
 // State cost terms r(x)^2 enter with Gauss-Newton derivatives l_x = 2 J' r, l_xx = 2 J' J as in
 // the MPC's own iLQR (problem.hpp); second derivatives of the dynamics are left out, as in
 // Levine & Koltun's linearised variant and in our iLQR.
