@@ -1,0 +1,84 @@
+// Inverse optimal control (issue 6) learning the weights of the robot's own MPC: from the
+// Coarse MPC's plans along a jump (the issue's recovery check) and from executed jumps.
+// Seconds natively, minutes under AddressSanitizer: labelled long (tests/CMakeLists.txt).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "hmpc/ioc/demonstrations.hpp"
+#include "hmpc/ioc/learn.hpp"
+#include "ioc_test_support.hpp"
+
+namespace hmpc::ioc {
+namespace {
+
+using humanoid::ClosedLoopConfig;
+using humanoid::Motion;
+using humanoid::MpcKind;
+
+using test::jump_motion;
+using test::own_demonstration;
+
+// Learns from `ioc`, printing the likelihood per iteration and the weights against `truth`.
+LearnResult learn_and_print(const LocalIoc& ioc, const Weights& truth) {
+  LearnConfig config;
+  config.lbfgs.max_iterations = 200;
+  const LearnResult result = learn_weights(ioc, config, [&](int i, const Weights& w, double value) {
+    std::printf("iteration %3d  log p %.6e  cosine %.4f\n", i, value, cosine_similarity(w, truth));
+  });
+  std::printf("%s after %d iterations\n", result.stop.c_str(), result.iterations);
+  for (int k = 0; k < kWeightCount; ++k) {
+    std::printf("%-9s true %10.4g  learned %10.4g  learned/true %.4g\n", kWeightNames[k], truth[k],
+                result.weights[k], result.weights[k] / truth[k]);
+  }
+  std::printf("cosine similarity to the true weights: initial %.4f, learned %.4f\n",
+              cosine_similarity(config.initial, truth), cosine_similarity(result.weights, truth));
+  return result;
+}
+
+// The issue's check: the robot's own MPC under known weights, no noise; recovered up to scale
+// with cosine similarity >= 0.95. The demonstrations are the Coarse MPC's plans along a jump,
+// one window each (100).
+TEST(LocalIoc, RecoversTheWeightsOfTheRobotsOwnMpcFromItsPlans) {
+  const Motion motion = jump_motion();
+  ClosedLoopConfig config;
+  config.mpc = MpcKind::kCoarse;
+  config.truncate = false;
+  const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(motion, config);
+  ASSERT_FALSE(run.fell());
+  humanoid::ThreadPool pool(2);
+  const std::vector<Demonstration> plans = coarse_mpc_plans(motion, run, config.problem, &pool);
+  ASSERT_EQ(plans.size(), run.samples.size());
+  for (std::size_t k = 0; k < plans.size(); ++k) {  // the replay made the run's plans
+    ASSERT_TRUE(plans[k].inputs[0].isApprox(run.samples[k].torque, 1e-12)) << "sample " << k;
+  }
+  const LocalIoc ioc(motion, plans, &pool);
+  ASSERT_EQ(ioc.window_count(), static_cast<int>(plans.size()));
+  const Weights truth = weights_of(motion.weights);
+  const LearnResult result = learn_and_print(ioc, truth);
+  EXPECT_GT(result.log_likelihood, result.initial_log_likelihood);
+  EXPECT_GE(cosine_similarity(result.weights, truth), 0.95);
+}
+
+// The executed trajectory is harder: a window of it strings together the first steps of ten
+// different plans, each of which saw costs beyond the window's end. Measured: cosine 0.87
+// from four runs (0.50 at the initial weights); the test asserts learning towards the truth.
+TEST(LocalIoc, LearnsTowardsTheWeightsOfTheRobotsOwnMpcFromItsRuns) {
+  const Motion motion = jump_motion();
+  std::vector<Demonstration> demos;
+  for (const Eigen::Vector3d& nudge : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.05, 0, 0),
+                                       Eigen::Vector3d(-0.05, 0, 0), Eigen::Vector3d(0, 0.05, 0)}) {
+    demos.push_back(own_demonstration(motion, 2.1, nudge));
+  }
+  humanoid::ThreadPool pool(2);
+  const LocalIoc ioc(motion, demos, &pool);
+  ASSERT_EQ(ioc.window_count(), 28);
+  const Weights truth = weights_of(motion.weights);
+  const LearnResult result = learn_and_print(ioc, truth);
+  EXPECT_TRUE(result.converged) << result.stop;
+  EXPECT_GT(result.log_likelihood, result.initial_log_likelihood);
+  EXPECT_GT(cosine_similarity(result.weights, truth), cosine_similarity(initial_weights(), truth) + 0.2);
+}
+
+}  // namespace
+}  // namespace hmpc::ioc
