@@ -58,8 +58,9 @@ TEST(LocalIoc, GradientMatchesFiniteDifferences) {
   Weights gradient;
   ioc.log_likelihood(w, &gradient);
   // Central differences in log w_k at steps h and h/2 combined by Richardson extrapolation,
-  // (4 D(h/2) - D(h)) / 3, which cancels the h^2 error term (on aarch64 D(1e-3) alone was
-  // 1.2e-4 off on w_q1).
+  // (4 D(h/2) - D(h)) / 3, which cancels the h^2 error term. Tolerance 5e-4 relative: on
+  // aarch64 (qemu) the differences of w_q1 stay 1.7e-4 off with or without extrapolation,
+  // the likelihood's own round-off there; gradient bugs met while writing this were 30 % off.
   const auto difference = [&](int k, double h) {
     Weights plus = w, minus = w;
     plus[k] *= std::exp(h);
@@ -70,7 +71,7 @@ TEST(LocalIoc, GradientMatchesFiniteDifferences) {
     const double h = 2e-3;
     const double numeric = (4.0 * difference(k, h / 2) - difference(k, h)) / 3.0;
     const double analytic = w[k] * gradient[k];
-    EXPECT_NEAR(analytic, numeric, 1e-4 * std::max(1.0, std::abs(numeric))) << kWeightNames[k];
+    EXPECT_NEAR(analytic, numeric, 5e-4 * std::max(1.0, std::abs(numeric))) << kWeightNames[k];
   }
 }
 
