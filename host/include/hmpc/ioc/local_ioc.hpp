@@ -44,7 +44,6 @@
 // so it is left out of u_t: m_t counts a step's free inputs.
 #pragma once
 
-#include <memory>
 #include <vector>
 
 #include "hmpc/humanoid/closed_loop.hpp"
