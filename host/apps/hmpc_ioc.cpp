@@ -1,7 +1,10 @@
 // hmpc-ioc: inverse optimal control for the humanoid (thesis Ch. 4).
-//   demos     demonstrations by the robot's own Coarse MPC under a motion's weights
+//   demos     demonstrations: by the robot's own Coarse MPC under a motion's weights, or by
+//             the human demonstrator through retargeting (Sec. 4.2.1)
 //   learn     demonstrations -> the 13 weights of Eq. 4.31 (local IOC, Sec. 4.2.2)
 //   generate  a motion with learned weights through the Coarse-Fast MPC (Sec. 4.2.3)
+//   compare   generation with the initial and the learned weights against the targets
+//             (Figs. 4.3-4.5)
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "hmpc/cli/arguments.hpp"
 #include "hmpc/humanoid/physical_checks.hpp"
@@ -16,6 +20,8 @@
 #include "hmpc/ioc/demonstrations.hpp"
 #include "hmpc/ioc/files.hpp"
 #include "hmpc/ioc/learn.hpp"
+#include "hmpc/ioc/retargeting.hpp"
+#include "hmpc/ioc/viewing.hpp"
 
 namespace {
 
@@ -37,6 +43,12 @@ void usage(std::FILE* out) {
                "      D demonstrations (1..200, default 4) by the robot's own Coarse MPC (untruncated)\n"
                "      under the motion's weights: 'plans' (default) writes the plan the MPC made at\n"
                "      every sample, 'runs' the executed trajectories\n"
+               "  hmpc-ioc demos --from human --demonstrator NAME|FILE --motion NAME|FILE --out FILE\n"
+               "                 --reference FILE [--count D] [--seed N] [--threads T]\n"
+               "      D captures of the human demonstrator (NAME: jumping or squatting, in\n"
+               "      " HMPC_IOC_DEMONSTRATORS "), retargeted to the robot and tracked by its Coarse\n"
+               "      MPC (the motion gives the tracking weights); writes the demonstrations and, to\n"
+               "      --reference, the demonstrated behaviour as a motion file for learn/generate/compare\n"
                "  hmpc-ioc learn --motion NAME|FILE --demos FILE --out FILE [--iterations N] [--threads T]\n"
                "      learns the 13 weights of Eq. 4.31 (N: L-BFGS iterations, 1..1000, default 200);\n"
                "      the motion gives the targets and the weights that are not learned\n"
@@ -44,10 +56,16 @@ void usage(std::FILE* out) {
                "                    [--no-truncate] [--duration S] [--threads T]\n"
                "      runs the motion with the learned weights (default Coarse-Fast MPC in real time)\n"
                "      and writes trajectory.csv, filmstrip.png and base.png to DIR\n"
+               "  hmpc-ioc compare --motion NAME|FILE --weights FILE [--demonstrator NAME|FILE] [--out DIR]\n"
+               "                   [--mpc KIND] [--no-truncate] [--duration S] [--threads T]\n"
+               "      generates the motion with the initial weights (Sec. 4.3.1) and with FILE's, prints\n"
+               "      both runs' errors against the motion's targets, and the demonstrator's hidden weights\n"
+               "      if given; writes DIR/weights.png, DIR/compare.png and each run to DIR/initial and\n"
+               "      DIR/learned (default DIR: ioc-compare)\n"
                "  S: simulated seconds, 0.03..60 (default: the motion file's)\n"
                "  NAME: a motion shipped in " HMPC_HUMANOID_MOTIONS " (e.g. V-low-jump)\n"
                "exit status: 0 done, 2 bad arguments or input file, 1 an output could not be written,\n"
-               "%d (generate) the robot fell\n",
+               "%d (generate, compare) the robot fell with the learned weights\n",
                kFellStatus);
 }
 
@@ -163,18 +181,121 @@ int generate(humanoid::Motion motion, const std::string& stem, const std::string
   return run.fell() ? kFellStatus : 0;
 }
 
+int human_demos(const humanoid::Motion& task, const std::string& task_name, const std::string& demonstrator_name,
+                int count, int seed,
+                int threads, const std::string& out, const std::string& reference_out) {
+  const humanoid::Motion demonstrator =
+      humanoid::load_motion(humanoid::motion_path(demonstrator_name, HMPC_IOC_DEMONSTRATORS));
+  const auto start = std::chrono::steady_clock::now();
+  CaptureConfig capture;
+  capture.count = count;
+  capture.seed = static_cast<std::uint64_t>(seed);
+  capture.threads = threads;
+  const std::vector<Capture> captures =
+      capture_demonstrations(demonstrator, capture, [](int i, const humanoid::ClosedLoopRun& run) {
+        if (run.fell()) {
+          std::printf("capture %2d: the demonstrator fell at %.2f s; left out\n", i, run.fell_at);
+        } else {
+          std::printf("capture %2d: %.2f s\n", i, run.samples.back().time);
+        }
+        std::fflush(stdout);
+      });
+  if (captures.empty()) return fail("no capture: the demonstrator fell in every performance", 1);
+  RetargetConfig config;
+  config.threads = threads;
+  const Retargeted r = retarget(captures, task, config, [](int i, const TrackedDemonstration& t) {
+    std::printf("tracking %2d: RMS errors joints %.3f rad, height %.3f m, attitude %.3f rad%s\n", i,
+                t.errors.joints, t.errors.height, t.errors.attitude, t.fell ? "; the robot FELL, left out" : "");
+    std::fflush(stdout);
+  });
+  std::vector<Demonstration> demonstrations;
+  for (const TrackedDemonstration& t : r.tracked) {
+    if (!t.fell) demonstrations.push_back(t.demonstration);
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("%zu captures, time scale %.3f (Froude), %zu demonstrations in %.1f s\n", captures.size(), r.time_scale,
+              demonstrations.size(), seconds);
+  if (demonstrations.empty()) return fail("no demonstration: the robot fell in every tracking run", 1);
+  std::ofstream file(out);
+  write_demonstrations(file, demonstrations);
+  if (!file.flush()) return fail("cannot write " + out, 1);
+  std::ofstream reference(reference_out);
+  humanoid::write_motion(reference, r.reference,
+                         "The demonstrated behaviour (hmpc-ioc demos --from human): the mean of " +
+                             std::to_string(captures.size()) + " retargeted captures of " + demonstrator_name +
+                             ",\none phase per 30 ms; the weights are " + task_name + "'s.");
+  if (!reference.flush()) return fail("cannot write " + reference_out, 1);
+  std::printf("wrote %s: %zu demonstrations; %s: the targets\n", out.c_str(), demonstrations.size(),
+              reference_out.c_str());
+  return 0;
+}
+
+int compare(const humanoid::Motion& motion, const std::string& stem, const std::string& weights_path,
+            const std::string& demonstrator, const humanoid::ClosedLoopConfig& config, std::string out) {
+  const Weights learned = load_weights(weights_path);
+  if (out.empty()) out = "ioc-compare";
+  const Weights sets[2] = {initial_weights(), learned};
+  const char* const names[2] = {"initial", "learned"};
+  MotionErrors errors[2];
+  bool fell[2];
+  for (int k = 0; k < 2; ++k) {
+    humanoid::Motion m = motion;
+    m.weights = with_weights(motion.weights, sets[k]);
+    const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(m, config);
+    const humanoid::ClosedLoopSummary s = humanoid::summarise(run);
+    errors[k] = motion_errors(motion, run);
+    fell[k] = run.fell();
+    std::printf("%s weights, %s MPC: max solve %.1f ms, over 30 ms %d of %zu%s\n", names[k],
+                humanoid::name_of(config.mpc), s.max_solve_ms, s.overruns, run.samples.size(),
+                fell[k] ? (", FELL at " + std::to_string(run.fell_at) + " s").c_str() : "");
+    std::string error;
+    if (!humanoid::write_run(out + "/" + names[k], stem + ", " + names[k] + " weights", m, run, 8, error)) {
+      return fail(error, 1);
+    }
+  }
+  std::printf("%-28s %10s %10s\n", "RMS error against targets", "initial", "learned");
+  std::printf("%-28s %10.4f %10.4f\n", "base height [m]", errors[0].height, errors[1].height);
+  std::printf("%-28s %10.4f %10.4f\n", "attitude [rad]", errors[0].attitude, errors[1].attitude);
+  std::printf("%-28s %10.4f %10.4f\n", "base velocity [m/s]", errors[0].velocity, errors[1].velocity);
+  std::vector<WeightSet> pictured = {{names[0], sets[0], true}, {names[1], sets[1], true}};
+  if (!demonstrator.empty()) {
+    const Weights hidden = weights_of(
+        humanoid::load_motion(humanoid::motion_path(demonstrator, HMPC_IOC_DEMONSTRATORS)).weights);
+    pictured.push_back({"demonstrator (hidden)", hidden, false});
+    // Up to a common scale (IOC's weights have no absolute scale), fixed on the torque weights.
+    const double scale = hidden.head<kControlWeights>().array().log().mean() -
+                         sets[1].head<kControlWeights>().array().log().mean();
+    std::printf("%-9s %12s %12s %12s %22s\n", "weight", "initial", "learned", "hidden", "learned/hidden, scaled");
+    for (int k = 0; k < kWeightCount; ++k) {
+      std::printf("%-9s %12.5g %12.5g %12.5g %22.3f\n", kWeightNames[k], sets[0][k], sets[1][k], hidden[k],
+                  std::exp(std::log(sets[1][k] / hidden[k]) + scale));
+    }
+    std::printf("cosine similarity to the hidden weights: learned %.4f, initial %.4f\n",
+                cosine_similarity(sets[1], hidden), cosine_similarity(sets[0], hidden));
+  } else {
+    std::printf("%-9s %12s %12s\n", "weight", "initial", "learned");
+    for (int k = 0; k < kWeightCount; ++k) std::printf("%-9s %12.5g %12.5g\n", kWeightNames[k], sets[0][k], sets[1][k]);
+  }
+  std::string error;
+  if (!write_comparison(out, stem, pictured, error)) return fail(error, 1);
+  std::printf("wrote %s/weights.png, %s/compare.png, and each run to %s/initial and %s/learned\n", out.c_str(),
+              out.c_str(), out.c_str(), out.c_str());
+  return fell[1] ? kFellStatus : 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) return cli::exit_status(cli::ParseOutcome::kError, kProgram, "a command is required", usage);
   const std::string command = argv[1];
   if (command == "-h" || command == "--help") return cli::exit_status(cli::ParseOutcome::kHelp, kProgram, "", usage);
-  if (command != "demos" && command != "learn" && command != "generate") {
+  if (command != "demos" && command != "learn" && command != "generate" && command != "compare") {
     return cli::exit_status(cli::ParseOutcome::kError, kProgram, "unknown command '" + command + "'", usage);
   }
-  std::string motion_name, out, demos_path, weights_path;
-  int count = 4, iterations = 200;
-  bool runs = false, no_truncate = false;
+  std::string motion_name, out, demos_path, weights_path, demonstrator, reference;
+  int count = 4, iterations = 200, seed = 1;
+  std::string from = "plans";
+  bool no_truncate = false;
   humanoid::ClosedLoopConfig config;
   const auto required = [](const char* option, std::string& target) {
     return [option, &target](const std::string& v) {
@@ -189,15 +310,20 @@ int main(int argc, char** argv) {
   if (command != "learn") parser.number("--duration", 0.03, 60.0, "seconds in 0.03..60", config.duration);
   if (command == "demos") {
     parser.integer("--count", 1, 200, count);
-    parser.text("--from", [&runs](const std::string& v) {
-      runs = v == "runs";
-      return v == "plans" || v == "runs" ? std::string() : cli::bad_value("--from", "plans or runs", v);
+    parser.text("--from", [&from](const std::string& v) {
+      from = v;
+      return v == "plans" || v == "runs" || v == "human" ? std::string()
+                                                         : cli::bad_value("--from", "plans, runs or human", v);
     });
+    parser.text("--demonstrator", required("--demonstrator", demonstrator));
+    parser.text("--reference", required("--reference", reference));
+    parser.integer("--seed", 0, 1000000, seed);
   } else if (command == "learn") {
     parser.text("--demos", required("--demos", demos_path));
     parser.integer("--iterations", 1, 1000, iterations);
   } else {
     parser.text("--weights", required("--weights", weights_path));
+    if (command == "compare") parser.text("--demonstrator", required("--demonstrator", demonstrator));
     parser.text("--mpc", [&config](const std::string& v) {
       return humanoid::parse_mpc_kind(v, config.mpc) ? std::string()
                                                      : cli::bad_value("--mpc", "fine, coarse or coarse-fast", v);
@@ -208,10 +334,14 @@ int main(int argc, char** argv) {
   auto outcome = parser.parse(argc - 1, argv + 1, error);
   if (outcome == cli::ParseOutcome::kRun) {
     const char* missing = motion_name.empty()                                        ? "--motion is required"
-                          : command != "generate" && out.empty()                     ? "--out is required"
+                          : (command == "demos" || command == "learn") && out.empty() ? "--out is required"
                           : command == "learn" && demos_path.empty()                 ? "--demos is required"
-                          : command == "generate" && weights_path.empty()            ? "--weights is required"
-                                                                                     : nullptr;
+                          : command != "demos" && command != "learn" && weights_path.empty() ? "--weights is required"
+                          : from == "human" && demonstrator.empty() ? "--from human needs --demonstrator"
+                          : from == "human" && reference.empty()    ? "--from human needs --reference"
+                          : command == "demos" && from != "human" && !(demonstrator.empty() && reference.empty())
+                              ? "--demonstrator and --reference go with --from human"
+                              : nullptr;
     if (missing != nullptr) {
       outcome = cli::ParseOutcome::kError;
       error = missing;
@@ -222,8 +352,12 @@ int main(int argc, char** argv) {
 
   try {
     const humanoid::Motion motion = load(motion_name);
-    if (command == "demos") return demos(motion, count, !runs, config, out);
+    if (command == "demos" && from == "human") {
+      return human_demos(motion, stem_of(motion_name), demonstrator, count, seed, config.threads, out, reference);
+    }
+    if (command == "demos") return demos(motion, count, from == "plans", config, out);
     if (command == "learn") return learn(motion, demos_path, iterations, config.threads, out);
+    if (command == "compare") return compare(motion, stem_of(motion_name), weights_path, demonstrator, config, out);
     return generate(motion, stem_of(motion_name), weights_path, config, out);
   } catch (const humanoid::MotionFileError& e) {
     return fail(e.what(), 2);

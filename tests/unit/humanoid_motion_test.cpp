@@ -99,6 +99,89 @@ TEST(HumanoidMotion, PhaseAtPicksTheLatestStarted) {
   EXPECT_DOUBLE_EQ(m.phase_at(0.4).height, 1.05);
   EXPECT_DOUBLE_EQ(m.phase_at(1.0).height, 0.75);
   EXPECT_DOUBLE_EQ(m.phase_at(100.0).height, 0.85);
+  Motion one = m;
+  one.phase_count = 1;
+  EXPECT_DOUBLE_EQ(one.phase_at(1.0).height, 0.85);
+}
+
+void expect_same_motion(const Motion& a, const Motion& b) {
+  EXPECT_EQ(a.duration, b.duration);
+  EXPECT_EQ(a.model_substep, b.model_substep);
+  EXPECT_EQ(a.chair, b.chair);
+  EXPECT_EQ(a.seat_height, b.seat_height);
+  EXPECT_EQ(a.seat_x_min, b.seat_x_min);
+  EXPECT_EQ(a.seat_x_max, b.seat_x_max);
+  EXPECT_EQ(a.gait.period, b.gait.period);
+  EXPECT_EQ(a.gait.swing_height, b.gait.swing_height);
+  EXPECT_EQ(a.gait.swing_fraction, b.gait.swing_fraction);
+  const CostWeights &u = a.weights, &v = b.weights;
+  EXPECT_EQ(u.control, v.control);
+  EXPECT_EQ(u.attitude, v.attitude);
+  EXPECT_EQ(u.height, v.height);
+  EXPECT_EQ(u.velocity, v.velocity);
+  EXPECT_EQ(u.alpha, v.alpha);
+  EXPECT_EQ(u.beta, v.beta);
+  EXPECT_EQ(u.angular_velocity, v.angular_velocity);
+  EXPECT_EQ(u.fast, v.fast);
+  EXPECT_EQ(u.fast_control, v.fast_control);
+  EXPECT_EQ(u.foot, v.foot);
+  EXPECT_EQ(a.reach.active, b.reach.active);
+  EXPECT_EQ(a.reach.target, b.reach.target);
+  EXPECT_EQ(a.reach.start, b.reach.start);
+  EXPECT_EQ(a.reach.weight, b.reach.weight);
+  EXPECT_EQ(a.reach.control, b.reach.control);
+  ASSERT_EQ(a.phase_count, b.phase_count);
+  for (int k = 0; k < a.phase_count; ++k) {
+    EXPECT_EQ(a.phases[k].start, b.phases[k].start) << "phase " << k;
+    EXPECT_EQ(a.phases[k].attitude, b.phases[k].attitude) << "phase " << k;
+    EXPECT_EQ(a.phases[k].height, b.phases[k].height) << "phase " << k;
+    EXPECT_EQ(a.phases[k].velocity, b.phases[k].velocity) << "phase " << k;
+  }
+}
+
+Motion written_and_read(const Motion& m) {
+  std::stringstream file;
+  write_motion(file, m, "a comment\non two lines");
+  return parse_motion(file, "written");
+}
+
+TEST(HumanoidMotion, WrittenMotionsReadBackExactly) {
+  for (const char* name : {"II-walking", "IV-sitting", "V-low-jump", "VIII-double-flip", "reaching", "squatting"}) {
+    SCOPED_TRACE(name);
+    const Motion m = load_motion(motion_path(name));
+    expect_same_motion(m, written_and_read(m));
+  }
+  // A demonstration's targets: one phase per 30 ms step, every number with all its digits.
+  Motion m = load_motion(motion_path("V-low-jump"));
+  m.model_substep = 0.004;
+  m.phase_count = kMaxPhases;
+  for (int k = 0; k < kMaxPhases; ++k) {
+    m.phases[k].start = 0.03 * k;
+    m.phases[k].attitude = Eigen::Vector3d(std::sin(k), 0.1 / (k + 3.0), -M_PI / (k + 1));
+    m.phases[k].height = 0.8 + 1e-3 * std::cos(k) + 1e-17;
+    m.phases[k].velocity = Eigen::Vector3d(1.0 / 3.0, -k * 1e-9, 2.0 / 7.0);
+  }
+  m.duration = 0.03 * kMaxPhases;
+  const Motion read = written_and_read(m);
+  expect_same_motion(m, read);
+  EXPECT_EQ(read.phase_at(0.03 * 100 + 1e-9).height, m.phases[100].height);
+}
+
+TEST(HumanoidMotion, RejectsMoreThanMaxPhases) {
+  Motion m = load_motion(motion_path("V-low-jump"));
+  m.phase_count = kMaxPhases;
+  for (int k = 0; k < kMaxPhases; ++k) m.phases[k] = m.phases[0], m.phases[k].start = 0.03 * k;
+  std::stringstream file;
+  write_motion(file, m, "");
+  file.seekp(0, std::ios::end);
+  file << "\n[phase]\nstart = 100\nattitude = 0 0 0\nheight = 0.85\nvelocity = 0 0 0\n";
+  try {
+    parse_motion(file, "long.motion");
+    FAIL() << "accepted " << kMaxPhases + 1 << " phases";
+  } catch (const MotionFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than " + std::to_string(kMaxPhases) + " phases"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(HumanoidMotion, AttitudeQuaternionMatchesEulerComposition) {

@@ -20,11 +20,12 @@ constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
 template <int N, int A>
 std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N, A>, N>> make_single_layer(
     const Motion& motion, const BasicState<A>& initial, ThreadPool* pool, ProblemConfig config,
-    double step) {
+    double step, int iteration_cap) {
   config = model_config(motion, config);
   config.step = step;
   typename RecedingHorizonMpc<HumanoidProblem<N, A>, N>::Config mpc;
   mpc.solver = layer_solver(motion);
+  if (iteration_cap > 0) mpc.solver.max_iterations = iteration_cap;
   mpc.steps_per_sample = static_cast<int>(kSamplingPeriod / step + 0.5);
   return std::make_unique<RecedingHorizonMpc<HumanoidProblem<N, A>, N>>(
       HumanoidProblem<N, A>(motion, initial, config, pool), mpc);
@@ -201,6 +202,12 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   if (config.threads < 1 || config.threads > 64) {
     throw std::invalid_argument("closed loop: threads must be in 1..64");
   }
+  if (config.iteration_cap < 0 || config.iteration_cap > 1000) {
+    throw std::invalid_argument("closed loop: the iteration cap must be in 0..1000");
+  }
+  if (!(config.start_height > 0.3 && config.start_height < 1.5)) {
+    throw std::invalid_argument("closed loop: the start height must be within 0.3..1.5 m");
+  }
   ThreadPool pool(config.threads);
   ThreadPool* workers = config.threads > 1 ? &pool : nullptr;
   ProblemConfig start = config.problem;
@@ -208,17 +215,19 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   if (!config.initial_velocity.allFinite() || config.initial_velocity.norm() > 1.0) {
     throw std::invalid_argument("closed loop: the initial velocity must be finite and at most 1 m/s");
   }
-  BasicState<A> initial = standing_state<A>(start, kStartHeight);
+  BasicState<A> initial = standing_state<A>(start, config.start_height);
   // v's linear part is the torso origin's velocity in torso coordinates (model.hpp).
   const Eigen::Quaterniond orientation(initial.q[3], initial.q[4], initial.q[5], initial.q[6]);
   initial.v.template segment<3>(3) = orientation.conjugate() * config.initial_velocity;
   switch (config.mpc) {
     case MpcKind::kFine: {
-      const auto mpc = make_single_layer<kFineHorizon, A>(motion, initial, workers, config.problem, kFineStep);
+      const auto mpc = make_single_layer<kFineHorizon, A>(motion, initial, workers, config.problem, kFineStep,
+                                                                config.iteration_cap);
       return simulate(*mpc, motion, config, initial, duration);
     }
     case MpcKind::kCoarse: {
-      const auto mpc = make_single_layer<kCoarseHorizon, A>(motion, initial, workers, config.problem, kCoarseStep);
+      const auto mpc = make_single_layer<kCoarseHorizon, A>(motion, initial, workers, config.problem, kCoarseStep,
+                                                                  config.iteration_cap);
       return simulate(*mpc, motion, config, initial, duration);
     }
     case MpcKind::kCoarseFast:

@@ -1,5 +1,6 @@
 #include "hmpc/humanoid/motion.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -175,9 +176,10 @@ class Reader {
 }  // namespace
 
 const Phase& Motion::phase_at(double t) const {
-  int i = 0;
-  while (i + 1 < phase_count && phases[i + 1].start <= t) ++i;
-  return phases[i];
+  // The first phase after t, by bisection: a demonstration's motion has one phase per step.
+  const auto later = std::upper_bound(phases.begin() + 1, phases.begin() + std::max(1, phase_count), t,
+                                      [](double time, const Phase& phase) { return time < phase.start; });
+  return *(later - 1);
 }
 
 double Gait::foot_height(double t, int foot) const {
@@ -297,6 +299,51 @@ std::string motion_path(const std::string& name_or_path, const std::string& ship
     return name_or_path;
   }
   return shipped_dir + "/" + name_or_path + ".motion";
+}
+
+void write_motion(std::ostream& out, const Motion& motion, const std::string& comment) {
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) out << "# " << line << '\n';
+  char buffer[96];
+  const auto number = [&buffer](double v) {
+    std::snprintf(buffer, sizeof buffer, "%.17g", v);
+    return std::string(buffer);
+  };
+  const auto vector3 = [&number](const Eigen::Vector3d& v) {
+    return number(v.x()) + " " + number(v.y()) + " " + number(v.z());
+  };
+  const CostWeights& w = motion.weights;
+  out << kVersionLine << "\n\n[motion]\nduration = " << number(motion.duration) << '\n';
+  out << "chair = "
+      << (motion.chair ? number(motion.seat_height) + " " + number(motion.seat_x_min) + " " + number(motion.seat_x_max)
+                       : std::string("none"))
+      << '\n';
+  out << "gait = "
+      << (motion.gait.period > 0.0 ? number(motion.gait.period) + " " + number(motion.gait.swing_height) + " " +
+                                         number(motion.gait.swing_fraction)
+                                   : std::string("none"))
+      << '\n';
+  if (motion.model_substep > 0.0) out << "model_substep = " << number(motion.model_substep) << '\n';
+  out << "\n[weights]\n";
+  const char* const joints[] = {"HAA", "HFE", "KFE", "AFE"};
+  for (int j = 0; j < 4; ++j) out << "w_" << joints[j] << " = " << number(w.control[j]) << '\n';
+  for (int i = 0; i < 4; ++i) out << "w_q" << i + 1 << " = " << number(w.attitude[i]) << '\n';
+  out << "w_height = " << number(w.height) << '\n';
+  const char* const axes[] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) out << "w_v" << axes[i] << " = " << number(w.velocity[i]) << '\n';
+  out << "w_alpha = " << number(w.alpha) << "\nw_beta = " << number(w.beta) << '\n';
+  for (int i = 0; i < 3; ++i) out << "w_omega_" << axes[i] << " = " << number(w.angular_velocity[i]) << '\n';
+  out << "w_fast = " << number(w.fast) << "\nw_fast_control = " << number(w.fast_control)
+      << "\nw_foot = " << number(w.foot) << '\n';
+  for (int k = 0; k < motion.phase_count; ++k) {
+    const Phase& p = motion.phases[k];
+    out << "\n[phase]\nstart = " << number(p.start) << "\nattitude = " << vector3(p.attitude)
+        << "\nheight = " << number(p.height) << "\nvelocity = " << vector3(p.velocity) << '\n';
+  }
+  if (motion.reach.active) {
+    out << "\n[reach]\ntarget = " << vector3(motion.reach.target) << "\nstart = " << number(motion.reach.start)
+        << "\nw_reach = " << number(motion.reach.weight) << "\nw_SFE = " << number(motion.reach.control) << '\n';
+  }
 }
 
 Motion load_motion(const std::string& path) {

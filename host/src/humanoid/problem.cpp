@@ -84,6 +84,9 @@ typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const State
   for (int k = 0; k < 4; ++k) {  // foot heights, heel and toe of each sole (Gait, motion.hpp)
     r[14 + k] = std::sqrt(w.foot) * (f.sole_height[k] - motion_.gait.foot_height(time, k / 2));
   }
+  for (int j = 0; j < 2 * kJointsPerLeg; ++j) {  // joint tracking (CostWeights::joint)
+    r[18 + j] = std::sqrt(w.joint) * (x[7 + j] - target.joints[j]);  // q = (p, quaternion, joints)
+  }
   if constexpr (A == 1) {  // Eq. 2.53, from the reach's start
     const Reach& reach = motion_.reach;
     const double weight = time >= reach.start ? reach.weight : 0.0;

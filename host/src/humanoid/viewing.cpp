@@ -14,10 +14,6 @@ namespace {
 
 const char* const kLegNames[2] = {"left", "right"};
 const char* const kJointNames[kJointsPerLeg] = {"hip_abduction", "hip_flexion", "knee", "ankle"};
-// trajectory.csv's columns (1-based, as gnuplot counts): 15 base columns, joints and torques,
-// then 9 more before target_height and target_vx.
-template <int A>
-constexpr int kTargetHeightColumn = 15 + 2 * Dimensions<A>::kJoints + 10;
 
 void write_point(std::ostream& out, const Vector3& p, const Vector3& centre) {
   out << p.x() - centre.x() << ' ' << p.y() - centre.y() << ' ' << p.z() << '\n';
@@ -193,7 +189,7 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
        << "set datafile separator ','\nset size noratio\nset autoscale\nunset title\n"
        << "set xtics autofreq font ''\nset ytics autofreq font ''\nset key outside top center horizontal\n"
        << "set multiplot layout " << (A == 1 ? 3 : 2) << ",1 title '" << title << "'\n"
-       << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:4 with lines lw 2 title 'base point', "
+       << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:" << kHeightColumn << " with lines lw 2 title 'base point', "
        << "'' using 1:" << kTargetHeightColumn<A> << " with steps dt 2 title 'target'\n";
     if (A == 1) {
       // The hand's distance to the reach target, from the columns after target_yaw.
@@ -204,7 +200,7 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
       }
       gp << ")) with lines lw 2 title 'hand', " << kReachTolerance << " dt 2 title '5 cm'\n";
     }
-    gp << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:5 with lines lw 2 "
+    gp << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:" << kVelocityColumn << " with lines lw 2 "
        << "title 'base point', '' using 1:" << kTargetHeightColumn<A> + 1 << " with steps dt 2 title 'target'\n"
        << "unset multiplot\n";
     if (!gp) return fail(error, "cannot write " + script.string());

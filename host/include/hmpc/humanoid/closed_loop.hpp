@@ -29,6 +29,11 @@ bool parse_mpc_kind(const std::string& name, MpcKind& kind);
 constexpr double kFineStep = 0.010;
 constexpr int kFineHorizon = 30;
 
+// Every motion starts standing quietly (standing_state) at motion I's height, Table 2.2: the
+// first phases of IV (0.65 m, sitting down) and VII-VIII (0 m, a crouch the legs cannot reach)
+// are targets to move towards, not poses to start in.
+constexpr double kStartHeight = 0.85;
+
 struct ClosedLoopConfig {
   MpcKind mpc = MpcKind::kCoarseFast;
   double duration = 0.0;  // [s]; 0: the motion file's
@@ -46,6 +51,13 @@ struct ClosedLoopConfig {
   // The whole robot's velocity at the start [m/s], world (joint rates zero, so the feet slide
   // until friction stops them): the benchmark's perturbed starts. At most 1 m/s.
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
+  // The base point's height in the starting stance [m]: another body (a demonstrator with longer
+  // legs, hmpc/ioc/demonstrator.hpp) stands at its own.
+  double start_height = kStartHeight;
+  // The Fine and Coarse MPCs' iLQR iteration cap per sample; 0: Table 2.4's (kIterationCap).
+  // More makes each plan nearer a local optimum of its cost, as the human demonstrator's
+  // (hmpc/ioc/demonstrator.hpp) should be; Coarse-Fast keeps its own.
+  int iteration_cap = 0;
   ProblemConfig problem{};
 };
 
@@ -83,15 +95,10 @@ using ClosedLoopSample = BasicClosedLoopSample<0>;
 using ClosedLoopRun = BasicClosedLoopRun<0>;
 using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 
-// Every motion starts standing quietly (standing_state) at motion I's height, Table 2.2: the
-// first phases of IV (0.65 m, sitting down) and VII-VIII (0 m, a crouch the legs cannot reach)
-// are targets to move towards, not poses to start in.
-constexpr double kStartHeight = 0.85;
-
-// Runs `motion` from standing_state at kStartHeight, on the biped (A = 0) or, for a reaching
+// Runs `motion` from standing_state at ClosedLoopConfig::start_height, on the biped (A = 0) or, for a reaching
 // motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument for a
-// negative or non-finite duration, threads outside 1..64, or a motion that needs the other
-// robot.
+// negative or non-finite duration, threads outside 1..64, an iteration cap outside 0..1000, a
+// start height outside 0.3..1.5 m, or a motion that needs the other robot.
 template <int A = 0>
 BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
 

@@ -56,6 +56,10 @@ struct CostWeights {
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // w_omega_x, _y, _z
   double fast = 0.0, fast_control = 0.0;  // Eq. 2.52 and the deviation nu's weight
   double foot = 0.0;                       // foot heights (Gait)
+  // Joint-angle tracking, l_joint = w_joint |q_joints - Phase::joints|^2 over the legs' joints:
+  // the tracking MPC that reproduces a retargeted demonstration on the robot (Sec. 4.2.1,
+  // hmpc/ioc/retargeting.hpp). Not in a motion file (always 0 there).
+  double joint = 0.0;
 };
 
 // Foot heights (ours: the thesis has no such term). Sec. 2.6's costs alone never lift a foot
@@ -95,11 +99,14 @@ struct Phase {
   Eigen::Vector3d attitude = Eigen::Vector3d::Zero();   // roll, pitch, yaw [rad]
   double height = 0.0;                                  // [m]
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   // [m/s]
+  // The legs' joint angles for CostWeights::joint (left leg first, LegJoint order) [rad].
+  std::array<double, 8> joints{};
 };
 
-// Fixed capacity, so a problem holds its motion by value without allocating: Table 2.3's
-// longest schedule (VIII) has six phases.
-constexpr int kMaxPhases = 8;
+// Fixed capacity, so a problem holds its motion by value without allocating. Table 2.3's
+// longest schedule (VIII) has six phases; a demonstration's targets (hmpc/ioc/retargeting.hpp)
+// have one phase per 30 ms coarse step: 128 hold 3.8 s (16 kB a motion).
+constexpr int kMaxPhases = 128;
 
 // The longest model sub-step a motion may ask for: semi-implicit Euler's stability bound
 // omega h < 2 for the stiffest explicit mode, a foot on its soles at 195 rad/s (contact.hpp).
@@ -128,6 +135,10 @@ class MotionFileError : public std::runtime_error {
 // Reads a motion file; `source` names it in error messages.
 Motion parse_motion(std::istream& in, const std::string& source);
 Motion load_motion(const std::string& path);
+// Writes `motion` in the file format above, every number to full precision (parse_motion reads
+// it back exactly), after `comment` as '#' lines. Phase::joints and CostWeights::joint are not
+// part of the format and are not written.
+void write_motion(std::ostream& out, const Motion& motion, const std::string& comment);
 // A command line's motion: a path (it has a '/' or ends in .motion) as it is, else the name of
 // a file shipped in `shipped_dir` (e.g. "V-low-jump").
 std::string motion_path(const std::string& name_or_path, const std::string& shipped_dir);

@@ -109,9 +109,10 @@ struct BaseFeatures {
 
 // Square-root-weighted residuals: 4 attitude, 1 height, 3 velocity, 1 alpha, 2 beta (right,
 // left), 3 angular velocity, 4 foot heights (as BaseFeatures::sole_height; Gait in motion.hpp),
-// and for the robot with an arm 3 for the hand (Eq. 2.53).
+// 8 leg joint angles (CostWeights::joint, the tracking MPC's), and for the robot with an arm 3
+// for the hand (Eq. 2.53).
 template <int A>
-constexpr int kCostResiduals = 18 + 3 * A;
+constexpr int kCostResiduals = 26 + 3 * A;
 
 // The state cost of Sec. 4.3.1 for one motion. Immutable after construction; every function
 // is safe to call from several threads.

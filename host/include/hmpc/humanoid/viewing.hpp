@@ -31,6 +31,13 @@ StickFigure stick_figure(const BasicState<A>& x, const ProblemConfig& config = P
 template <int A>
 void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicClosedLoopRun<A>& run);
 
+// Columns of trajectory.csv that scripts plot, 1-based as gnuplot counts: the base point's
+// height and velocity, the torso quaternion (w, x, y, z from kQuaternionColumn), and the
+// targets (height, v_x, v_y, v_z, roll, pitch, yaw from kTargetHeightColumn<A>).
+constexpr int kTimeColumn = 1, kHeightColumn = 4, kVelocityColumn = 5, kQuaternionColumn = 8;
+template <int A>
+constexpr int kTargetHeightColumn = 15 + 2 * Dimensions<A>::kJoints + 10;
+
 // Writes DIR/trajectory.csv, DIR/filmstrip.dat, DIR/humanoid.gp and runs gnuplot for
 // DIR/filmstrip.png (`frames` evenly spaced samples, 2..16) and DIR/base.png. `title` heads
 // the pictures. Returns false (with the reason in `error`) if a file cannot be written or
