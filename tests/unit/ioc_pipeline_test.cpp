@@ -1,0 +1,90 @@
+// The whole of Sec. 4.2 on the human demonstrator (demonstrator.hpp): captures of jumping and
+// squatting under hidden weights, retargeted and tracked on the robot (retargeting.hpp),
+// learned (learn.hpp), and each task generated with the learned and with the initial weights.
+// Six captures a task instead of the thesis's 40 (minutes otherwise); label long.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "hmpc/ioc/learn.hpp"
+#include "hmpc/ioc/retargeting.hpp"
+
+namespace {
+
+using namespace hmpc;
+using namespace hmpc::ioc;
+
+constexpr int kCaptures = 6;
+
+struct Task {
+  Weights hidden;   // the demonstrator's
+  Weights learned;
+  humanoid::Motion reference;  // the demonstrated behaviour's targets, the robot task's weights
+};
+
+Task learn_task(const std::string& demonstrator, const std::string& task) {
+  SCOPED_TRACE(demonstrator);
+  const humanoid::Motion human = humanoid::load_motion(std::string(HMPC_IOC_DEMONSTRATORS) + "/" + demonstrator);
+  const humanoid::Motion robot = humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + task);
+  CaptureConfig capture;
+  capture.count = kCaptures;
+  const std::vector<Capture> captures = capture_demonstrations(human, capture);
+  // The demonstrator, an MPC, may fall (measured: 1 jump in 8); most performances stand.
+  EXPECT_GE(captures.size(), static_cast<std::size_t>(kCaptures - 1));
+  const Retargeted r = retarget(captures, robot, RetargetConfig{});
+  std::vector<Demonstration> demonstrations;
+  for (const TrackedDemonstration& t : r.tracked) {
+    if (t.fell) continue;
+    // The tracking follows the retargeted joint angles within 0.15 rad RMS (measured 0.02-0.15).
+    EXPECT_LT(t.errors.joints, 0.15);
+    demonstrations.push_back(t.demonstration);
+  }
+  EXPECT_GE(demonstrations.size(), captures.size() - 1);
+  humanoid::ThreadPool pool(2);
+  const LocalIoc ioc(r.reference, demonstrations, &pool);
+  const LearnResult result = learn_weights(ioc, LearnConfig{});
+  EXPECT_GT(result.log_likelihood, ioc.log_likelihood(initial_weights()));
+  return {weights_of(human.weights), result.weights, r.reference};
+}
+
+// RMS of log(w / hidden) over the torque weights, up to a common scale (IOC's weights have
+// none): 0 when the proportions are the hidden ones.
+double torque_proportion_error(const Weights& w, const Weights& hidden) {
+  const Eigen::Array4d log_ratio = (w.head<kControlWeights>().array() / hidden.head<kControlWeights>().array()).log();
+  return std::sqrt((log_ratio - log_ratio.mean()).square().mean());
+}
+
+// Errors of the Coarse-Fast MPC's run (untruncated: the same on any machine) against the
+// demonstrated behaviour, with `weights`.
+MotionErrors generate(const Task& task, const Weights& weights) {
+  humanoid::ClosedLoopConfig config;
+  config.truncate = false;
+  humanoid::Motion m = task.reference;
+  m.weights = with_weights(m.weights, weights);
+  return motion_errors(task.reference, humanoid::run_closed_loop(m, config));
+}
+
+void expect_learned_beats_initial(const Task& task) {
+  // The torque weights' proportions come nearer the demonstrator's (measured with 8 captures:
+  // jumping 0.33 against the initial weights' 0.59, squatting 0.07 against 0.26). The state
+  // weights come out 2-100 times too small relative to them (see the closing notes of issue 6);
+  // not asserted.
+  EXPECT_LT(torque_proportion_error(task.learned, task.hidden), torque_proportion_error(initial_weights(), task.hidden));
+  // Figs. 4.4-4.5: the motion generated with the learned weights is nearer the demonstrated
+  // one than with the initial weights (with which the robot falls).
+  const MotionErrors initial = generate(task, initial_weights()), learned = generate(task, task.learned);
+  EXPECT_LT(learned.height, initial.height);
+  EXPECT_LT(learned.attitude, initial.attitude);
+  EXPECT_LT(learned.velocity, initial.velocity);
+}
+
+TEST(IocPipeline, JumpingFromTheHumanDemonstrator) {
+  expect_learned_beats_initial(learn_task("jumping.motion", "V-low-jump.motion"));
+}
+
+TEST(IocPipeline, SquattingFromTheHumanDemonstrator) {
+  expect_learned_beats_initial(learn_task("squatting.motion", "squatting.motion"));
+}
+
+}  // namespace
