@@ -260,8 +260,8 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
     std::vector<double> at(samples);
     for (int k = 0; k < samples; ++k) {
       const double s = std::min(reference_at[k], static_cast<double>(match.size() - 1));
-      const int i = std::max(0, std::min(static_cast<int>(s), static_cast<int>(match.size()) - 2));
-      at[k] = match.size() == 1 ? match[0] : match[i] + (s - i) * (match[i + 1] - match[i]);
+      const int i = std::min(static_cast<int>(s), static_cast<int>(match.size()) - 2);  // match has >= 2
+      at[k] = match[i] + (s - i) * (match[i + 1] - match[i]);
     }
     warped.push_back(with_velocities(resample(poses, at), humanoid::kCoarseStep));
   }
