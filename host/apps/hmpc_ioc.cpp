@@ -82,6 +82,12 @@ std::string stem_of(const std::string& name) {
   return std::filesystem::path(humanoid::motion_path(name, HMPC_HUMANOID_MOTIONS)).stem().string();
 }
 
+bool save_demonstrations(const std::string& path, const std::vector<Demonstration>& demonstrations) {
+  std::ofstream file(path);
+  write_demonstrations(file, demonstrations);
+  return static_cast<bool>(file.flush());
+}
+
 int demos(const humanoid::Motion& motion, int count, bool plans, const humanoid::ClosedLoopConfig& run_config,
           const std::string& out) {
   const int threads = run_config.threads;
@@ -111,9 +117,7 @@ int demos(const humanoid::Motion& motion, int count, bool plans, const humanoid:
                 run.samples.size());
   }
   if (demonstrations.empty()) return fail("no demonstration: the robot fell in every run", 1);
-  std::ofstream file(out);
-  write_demonstrations(file, demonstrations);
-  if (!file.flush()) return fail("cannot write " + out, 1);
+  if (!save_demonstrations(out, demonstrations)) return fail("cannot write " + out, 1);
   std::printf("wrote %s: %zu demonstrations\n", out.c_str(), demonstrations.size());
   return 0;
 }
@@ -182,8 +186,7 @@ int generate(humanoid::Motion motion, const std::string& stem, const std::string
 }
 
 int human_demos(const humanoid::Motion& task, const std::string& task_name, const std::string& demonstrator_name,
-                int count, int seed,
-                int threads, const std::string& out, const std::string& reference_out) {
+                int count, int seed, int threads, const std::string& out, const std::string& reference_out) {
   const humanoid::Motion demonstrator =
       humanoid::load_motion(humanoid::motion_path(demonstrator_name, HMPC_IOC_DEMONSTRATORS));
   const auto start = std::chrono::steady_clock::now();
@@ -216,9 +219,7 @@ int human_demos(const humanoid::Motion& task, const std::string& task_name, cons
   std::printf("%zu captures, time scale %.3f (Froude), %zu demonstrations in %.1f s\n", captures.size(), r.time_scale,
               demonstrations.size(), seconds);
   if (demonstrations.empty()) return fail("no demonstration: the robot fell in every tracking run", 1);
-  std::ofstream file(out);
-  write_demonstrations(file, demonstrations);
-  if (!file.flush()) return fail("cannot write " + out, 1);
+  if (!save_demonstrations(out, demonstrations)) return fail("cannot write " + out, 1);
   std::ofstream reference(reference_out);
   humanoid::write_motion(reference, r.reference,
                          "The demonstrated behaviour (hmpc-ioc demos --from human): the mean of " +
