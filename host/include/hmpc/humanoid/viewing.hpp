@@ -34,7 +34,7 @@ void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicCl
 // Columns of trajectory.csv that scripts plot, 1-based as gnuplot counts: the base point's
 // height and velocity, the torso quaternion (w, x, y, z from kQuaternionColumn), and the
 // targets (height, v_x, v_y, v_z, roll, pitch, yaw from kTargetHeightColumn<A>).
-constexpr int kTimeColumn = 1, kHeightColumn = 4, kVelocityColumn = 5, kQuaternionColumn = 8;
+constexpr int kHeightColumn = 4, kVelocityColumn = 5, kQuaternionColumn = 8;
 template <int A>
 constexpr int kTargetHeightColumn = 15 + 2 * Dimensions<A>::kJoints + 10;
 
