@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "hmpc/ioc/learn.hpp"
@@ -79,12 +80,42 @@ void expect_learned_beats_initial(const Task& task) {
   EXPECT_LT(learned.velocity, initial.velocity);
 }
 
-TEST(IocPipeline, JumpingFromTheHumanDemonstrator) {
-  expect_learned_beats_initial(learn_task("jumping.motion", "V-low-jump.motion"));
-}
-
-TEST(IocPipeline, SquattingFromTheHumanDemonstrator) {
-  expect_learned_beats_initial(learn_task("squatting.motion", "squatting.motion"));
+// One test for both tasks: the last check compares what they learned (tests run in separate
+// processes, so two tests would learn each task twice).
+TEST(IocPipeline, JumpingAndSquattingFromTheHumanDemonstrator) {
+  const Task jumping = learn_task("jumping.motion", "V-low-jump.motion");
+  const Task squatting = learn_task("squatting.motion", "squatting.motion");
+  for (const Task* task : {&jumping, &squatting}) {
+    std::printf("%-9s %12s %12s\n", task == &jumping ? "jumping" : "squatting", "learned", "hidden");
+    for (int k = 0; k < kWeightCount; ++k) {
+      std::printf("%-9s %12.4g %12.4g\n", kWeightNames[k], task->learned[k], task->hidden[k]);
+    }
+  }
+  {
+    SCOPED_TRACE("jumping");
+    expect_learned_beats_initial(jumping);
+  }
+  {
+    SCOPED_TRACE("squatting");
+    expect_learned_beats_initial(squatting);
+  }
+  // Jumping and squatting learn different weights: not the same up to scale (the issue's
+  // threshold for that is a cosine similarity of 0.95; both start from the initial weights,
+  // cosine 1; measured 0.55), and the torque weights' proportions differ between the tasks the
+  // way the demonstrator's do: the learned jumping / squatting ratios are nearer the hidden ones
+  // than equal proportions are (measured 0.23 against 0.36). Each task's learned torque
+  // proportions are not always nearer its own demonstrator's than the other task's (squatting:
+  // 0.132 either way), and the state weights' differences do not follow the hidden ones
+  // (closing notes of issue 6): neither is asserted.
+  const double cosine = cosine_similarity(jumping.learned, squatting.learned);
+  const Weights hidden_ratio = jumping.hidden.cwiseQuotient(squatting.hidden);
+  const double ratio_error = torque_proportion_error(jumping.learned.cwiseQuotient(squatting.learned), hidden_ratio);
+  const double equal_error = torque_proportion_error(Weights::Ones(), hidden_ratio);
+  std::printf("cosine similarity of the learned weights, jumping to squatting: %.3f\n"
+              "torque proportions, jumping / squatting: learned %.3f from the hidden, equal ones %.3f\n",
+              cosine, ratio_error, equal_error);
+  EXPECT_LT(cosine, 0.95);
+  EXPECT_LT(ratio_error, equal_error);
 }
 
 }  // namespace

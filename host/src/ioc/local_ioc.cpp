@@ -142,7 +142,7 @@ LocalIoc::LocalIoc(const humanoid::Motion& motion, const std::vector<Demonstrati
 LocalIoc::~LocalIoc() = default;
 
 double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, Workspace& work,
-                                       Weights& gradient) const {
+                                       Weights* gradient) const {
   // Row weights: the estimated weight of the row's term, or 1 (the row carries its own).
   Eigen::Matrix<double, kResiduals, 1> c;
   for (int r = 0; r < kResiduals; ++r) c[r] = feature_of_row_[r] < 0 ? 1.0 : w[feature_of_row_[r]];
@@ -208,7 +208,8 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
   // dynamics A - B K instead: differentiating the backward pass carries the open-loop products
   // of A, which lost every digit on landing windows (measured: -4014 against 1.72 by
   // differences), while this pass stays within round-off of the differences.
-  gradient.setZero();
+  if (gradient == nullptr) return value;
+  gradient->setZero();
   StateVector dx = StateVector::Zero();
   StateMatrix Sigma_x = StateMatrix::Zero();
   for (int t = 0; t < kWindowSteps; ++t) {
@@ -221,7 +222,7 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
     // 2 u_j du_j + du_j^2 + Sigma_u,jj.
     for (int j = 0; j < kJoints; ++j) {
       if (!window.free[t][j]) continue;
-      gradient[kHAA + j % humanoid::kJointsPerLeg] += 2.0 * window.inputs[t][j] * du[j] + du[j] * du[j] + Sigma_u(j, j);
+      (*gradient)[kHAA + j % humanoid::kJointsPerLeg] += 2.0 * window.inputs[t][j] * du[j] + du[j] * du[j] + Sigma_u(j, j);
     }
     const humanoid::StepJacobian closed_loop = A - B * K;
     dx = A * dx + B * du;
@@ -233,7 +234,7 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
       const int k = feature_of_row_[row];
       if (k < 0) continue;
       const double a = J.row(row).dot(dx);
-      gradient[k] += 2.0 * window.residual[t][row] * a + a * a + J.row(row) * Sigma_x * J.row(row).transpose();
+      (*gradient)[k] += 2.0 * window.residual[t][row] * a + a * a + J.row(row) * Sigma_x * J.row(row).transpose();
     }
   }
   return value;
@@ -247,17 +248,16 @@ double LocalIoc::log_likelihood(const Weights& w, Weights* gradient) const {
   const int count = window_count();
   humanoid::run_on(pool_, lanes, [&](int lane) {
     for (int m = lane; m < count; m += lanes) {
-      values_[m] = window_log_likelihood(windows_[m], w, lanes_[lane], gradients_[m]);
+      values_[m] = window_log_likelihood(windows_[m], w, lanes_[lane], gradient ? &gradients_[m] : nullptr);
     }
   });
   // Summed in window order: the same total on any number of threads.
   double total = 0.0;
-  Weights sum = Weights::Zero();
-  for (int m = 0; m < count; ++m) {
-    total += values_[m];
-    sum += gradients_[m];
+  for (int m = 0; m < count; ++m) total += values_[m];
+  if (gradient != nullptr) {
+    gradient->setZero();
+    for (int m = 0; m < count; ++m) *gradient += gradients_[m];
   }
-  if (gradient != nullptr) *gradient = sum;
   return total;
 }
 

@@ -95,15 +95,16 @@ class LocalIoc {
 
   int window_count() const { return static_cast<int>(windows_.size()); }
   // log p(D | w), Eq. 4.10 in its whole-trajectory form, and (if non-null) its gradient in w
-  // (Eq. 4.21). Every weight must be positive (std::invalid_argument otherwise). -infinity
-  // (gradient unspecified) if round-off made a Q_uu indefinite.
+  // (Eq. 4.21; without it the forward pass is skipped). Every weight must be positive
+  // (std::invalid_argument otherwise). -infinity (gradient unspecified) if round-off made a
+  // Q_uu indefinite.
   double log_likelihood(const Weights& w, Weights* gradient = nullptr) const;
 
  private:
   struct Workspace;
-  // Window m's term and gradient, in `work`.
+  // Window m's term and, if `gradient` is non-null, its gradient (the forward pass), in `work`.
   double window_log_likelihood(const Window& window, const Weights& w, Workspace& work,
-                               Weights& gradient) const;
+                               Weights* gradient) const;
 
   std::vector<Window> windows_;
   std::array<int, kResiduals> feature_of_row_{};  // estimated weight of residual row, or -1
