@@ -11,11 +11,11 @@ set(CMAKE_SIZE arm-none-eabi-size CACHE FILEPATH "")
 
 # No exceptions, no RTTI, no guard variables or atexit registration: nothing that can pull
 # in the heap or an unwinder. -ffp-contract=off and no vectorisation keep the arithmetic
-# comparable with the host reference run (DESIGN.md §5).
+# comparable with the host reference run, built the same way (only libm differs).
 set(CMAKE_C_FLAGS_INIT "${HMPC_MCU_FLAGS} -ffunction-sections -fdata-sections -ffp-contract=off")
 set(CMAKE_CXX_FLAGS_INIT "${HMPC_MCU_FLAGS} -ffunction-sections -fdata-sections -ffp-contract=off -fno-exceptions -fno-rtti -fno-threadsafe-statics -fno-use-cxa-atexit -DEIGEN_DONT_VECTORIZE")
 set(CMAKE_ASM_FLAGS_INIT "${HMPC_MCU_FLAGS} -x assembler-with-cpp")
-# Build Release (-O3) for Eigen on Cortex-M: -Os is 4-8x slower (DESIGN.md §5).
+# Build Release (-O3) for Eigen on Cortex-M: -Os is 4-8x slower (Eigen relies on inlining).
 # newlib-nano; our own Reset_Handler replaces crt0.
 set(CMAKE_EXE_LINKER_FLAGS_INIT "${HMPC_MCU_FLAGS} --specs=nano.specs -nostartfiles -Wl,--gc-sections -Wl,--print-memory-usage")
 set(CMAKE_EXECUTABLE_SUFFIX_C .elf)

@@ -1,8 +1,8 @@
-// The forearm actuator board's application (issue 3, DESIGN.md §3.2): state machine, host
-// watchdog, scheduler and CAN handlers around the two-stage MPC and the hold PID, independent
-// of the board it runs on. Board support (firmware/boards/*) feeds it received frames and
-// sensor readings, calls tick() at 1 kHz and run_mpc() when mpc_due(), applies outputs() and
-// transmits what pop_frame() yields.
+// The forearm actuator board's application: state machine, host watchdog, scheduler and CAN
+// handlers around the two-stage MPC and the hold PID, independent of the board it runs on.
+// Board support (firmware/boards/*) feeds it received frames and sensor readings, calls tick()
+// at 1 kHz and run_mpc() when mpc_due(), applies outputs() and transmits what pop_frame()
+// yields.
 //
 //   boot --self-check--> idle --hold cmd--> hold (PID, load-velocity feedback)
 //   idle or hold --run cmd--> run (MPC)        any --idle cmd--> idle

@@ -1,7 +1,7 @@
-// Fault injection on outgoing CAN frames for the HIL (DESIGN.md §3.6, issue 4): frames lost or
-// with a bit flipped, at random with a seeded generator (a run is reproducible), and windows of
-// silence. The plant node applies it to its sensor frames (encoder or ADC dropouts, glitches),
-// the host controller to its frames to the board (a lossy or interrupted bus).
+// Fault injection on outgoing CAN frames for the HIL: frames lost or with a bit flipped, at
+// random with a seeded generator (a run is reproducible), and windows of silence. The plant
+// node applies it to its sensor frames (encoder or ADC dropouts, glitches), the host controller
+// to its frames to the board (a lossy or interrupted bus).
 #pragma once
 
 #include <cmath>

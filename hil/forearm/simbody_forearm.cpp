@@ -208,7 +208,7 @@ void SimbodyForearm::step(double v_p, double v_m) {
   s.pam->set_valve_voltage(state, s.v_p);
   s.motor.setForce(state, s.plant.motor_gain * s.v_m);
   // A changed input starts a new continuous interval; the first stepTo() after this only
-  // reports the current state (DESIGN.md §5), hence the loop.
+  // reports the current state (Debian 12's Simbody 3.7), hence the loop.
   s.integrator.reinitialize(SimTK::Stage::Dynamics, false);
   ++s.steps;
   const double target = static_cast<double>(s.steps) * kStep;  // no drift from summing kStep

@@ -1,12 +1,13 @@
 // The forearm of Eq. 3.1 (common/include/hmpc/models/forearm.hpp) built in Simbody: the plant
-// the HIL harness runs the forearm board against (DESIGN.md §3.6). Same physical parameters as
-// the controller's model, but none of its joint equation: Simbody supplies the multibody
-// dynamics (a pin joint, a rigid link, gravity), the integration and the state, which holds the
-// PAM pressure as a continuous variable. On top of Eq. 3.1 the plant has mechanical end stops,
-// actuator limits, and scale factors for plant-model mismatch.
+// the HIL harness runs the forearm board against. Same physical parameters as the controller's
+// model, but none of its joint equation: Simbody supplies the multibody dynamics (a pin joint,
+// a rigid link, gravity), the integration and the state, which holds the PAM pressure as a
+// continuous variable. On top of Eq. 3.1 the plant has mechanical end stops, actuator limits,
+// and scale factors for plant-model mismatch.
 //
 // Simbody stays behind this interface (pimpl), so that only simbody_forearm.cpp needs Simbody's
-// headers and their -UNDEBUG (DESIGN.md §5).
+// headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes when code including it is built
+// with NDEBUG: Simbody's GitHub issue 701).
 #pragma once
 
 #include <cstdint>

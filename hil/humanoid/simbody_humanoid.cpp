@@ -316,7 +316,8 @@ void BasicSimbodyHumanoid<A>::step(const JointVector& tau, double dt) {
     // A changed input starts a new continuous interval.
     s.integrator->reinitialize(SimTK::Stage::Dynamics, false);
   }
-  // The first stepTo() after (re)initialising may only report the state (DESIGN.md §5).
+  // The first stepTo() after (re)initialising may only report the state, not advance it
+  // (Debian 12's Simbody 3.7), hence the loop.
   const double target = s.integrator->getTime() + dt;
   while (s.integrator->getTime() < target) s.integrator->stepTo(target);
   s.state = s.integrator->getState();

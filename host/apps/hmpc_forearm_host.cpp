@@ -1,4 +1,4 @@
-// hmpc-forearm-host: the host forearm controller (issue 4). Drives one forearm board over CAN
+// hmpc-forearm-host: the host forearm controller. Drives one forearm board over CAN
 // (ForearmCanMaster: heartbeat, mode and strategy, target trajectory streaming), logs what the
 // board reports, and bridges to Cyclone DDS: publishes the board's state and MPC telemetry,
 // takes validated commands (mode, strategy, target) from operators (hmpc-forearm-cli).

@@ -1,13 +1,12 @@
 // Our humanoid dynamics against Simbody's on the same model (the rigid bodies, without the joint
-// armature Simbody's twin cannot mirror) and the same random states, side by side in one run
-// (DESIGN.md §6): bias forces (our RNEA), mass matrix (our CRBA) and forward
-// dynamics (ours: RNEA + CRBA + Cholesky; Simbody: realize(Acceleration), its O(n)
-// articulated-body method). Each Simbody call includes setting its state from ours (it must
-// recompute from q and v, as ours does) and the conversion to our coordinates (14x14 products,
-// plus one multiplyByM for the bias forces). And the derivatives of forward dynamics by
-// forward differences, the MPC's way (finite_difference.hpp's step), in q, v and the joint
-// torques: 1 + 15 + 14 + 8 = 38 forward dynamics each, the same perturbed states for both
-// (quaternion columns renormalised, so that each engine sees a valid state); the table also
+// armature Simbody's twin cannot mirror) and the same random states, side by side in one run: bias
+// forces (our RNEA), mass matrix (our CRBA) and forward dynamics (ours: RNEA + CRBA + Cholesky;
+// Simbody: realize(Acceleration), its O(n) articulated-body method). Each Simbody call includes
+// setting its state from ours (it must recompute from q and v, as ours does) and the conversion to
+// our coordinates (14x14 products, plus one multiplyByM for the bias forces). And the derivatives
+// of forward dynamics by forward differences, the MPC's way (finite_difference.hpp's step), in q, v
+// and the joint torques: 1 + 15 + 14 + 8 = 38 forward dynamics each, the same perturbed states for
+// both (quaternion columns renormalised, so that each engine sees a valid state); the table also
 // gives the largest difference between the two Jacobians.
 #include <benchmark/benchmark.h>
 

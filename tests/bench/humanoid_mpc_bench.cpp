@@ -1,4 +1,4 @@
-// Humanoid MPC figures (DESIGN.md §6), measured side by side in one run:
+// Humanoid MPC figures, measured side by side in one run:
 //   - the iLQR's linearisation of all N steps of the coarse problem (30 ms, N = 10, Table 2.4):
 //     dynamics Jacobians and Gauss-Newton cost derivatives, serial and on a ThreadPool of 2
 //     (thesis Sec. 2.6.2 used 10 OpenMP threads), with the step map's linearisation (sub-step

@@ -1,4 +1,4 @@
-// Inverse optimal control figures (issue 6), measured side by side in one run:
+// Inverse optimal control figures, measured side by side in one run:
 //   - linearising the demonstrations' windows (LocalIoc's constructor), 1 thread against 2;
 //   - one evaluation of log p(D | w) (Eq. 4.10) with its gradient (the backward and forward
 //     passes of local_ioc.hpp) against the value alone, and against the alternative gradient,
@@ -9,7 +9,7 @@
 // Demonstrations: by default the robot's own Coarse MPC plans along an untruncated Coarse run of
 // V-low-jump and of squatting (coarse_mpc_plans, one window a sample), so that the benchmark
 // needs nothing but the motion files; with --demos FILE --reference FILE.motion, that file's
-// (e.g. written by hmpc-ioc demos --from human, 40 captures: the issue's figure).
+// (e.g. written by hmpc-ioc demos --from human, 40 captures, as in the thesis).
 #include <chrono>
 #include <cstdio>
 #include <string>

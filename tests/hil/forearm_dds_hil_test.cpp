@@ -1,4 +1,4 @@
-// DDS to CAN, end to end (issue 4): hmpc-forearm-cli sends commands over Cyclone DDS (loopback,
+// DDS to CAN, end to end: hmpc-forearm-cli sends commands over Cyclone DDS (loopback,
 // its own domain id) to hmpc-forearm-host, which drives hmpc-forearm-board over vcan0 with the
 // Simbody plant in lock-step. The board's mode, as the host publishes it back over DDS, must
 // follow the CLI's commands; a malformed command must be rejected and counted, never acted on.

@@ -1,4 +1,4 @@
-// The forearm HIL over CAN (issue 4): board, host and Simbody plant as separate programs in
+// The forearm HIL over CAN: board, host and Simbody plant as separate programs in
 // lock-step on vcan0 (ctest runs this binary through hil/vcan/run-with-vcan.sh).
 //  - Every strategy of Table 3.1 tracks the 1 Hz +-30 deg target for 10 s end to end, with the
 //    Cortex-M7's compute time charged, a modest plant-model mismatch and sensor noise, and the

@@ -22,10 +22,10 @@ using namespace hmpc::humanoid;
 using test::motion;
 using test::run;
 
-// Motion I (issue 5's check): the base point at 0.85 +- 0.05 m for 5 s. Physics of the
-// bound: 5 cm is what a knee bend of ~6 degrees moves the base of our stance; a robot that
-// starts to fall leaves it within a few hundred ms. Also upright (tilt below 0.1 rad,
-// quaternion vector part below 0.05) and both feet loaded throughout.
+// Motion I: the base point at 0.85 +- 0.05 m for 5 s. Physics of the bound: 5 cm is what a
+// knee bend of ~6 degrees moves the base of our stance; a robot that starts to fall leaves it
+// within a few hundred ms. Also upright (tilt below 0.1 rad, quaternion vector part below
+// 0.05) and both feet loaded throughout.
 TEST(HumanoidClosedLoop, CoarseFastStandsFiveSeconds) {
   const ClosedLoopRun r = run(motion("I-standing"), MpcKind::kCoarseFast, 5.0);
   ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
@@ -125,10 +125,10 @@ TEST(HumanoidPhysicalChecks, MotionNumerals) {
 }
 
 // Figs. 2.10/2.12's ordering on motion I: Coarse-Fast's accumulated cost not above Coarse's,
-// and within 10 % of Fine's (issue 5's target). Not strictly below: with the joints' armature
-// (parameters.hpp) the Coarse plan of quiet standing leaves the lower layer nothing to refine
-// (its first iteration meets the tolerance), so the two costs are equal; the strict ordering
-// is measured on every motion by humanoid_mpc_bench.
+// and within 10 % of Fine's. Not strictly below: with the joints' armature (parameters.hpp)
+// the Coarse plan of quiet standing leaves the lower layer nothing to refine (its first
+// iteration meets the tolerance), so the two costs are equal; the strict ordering is measured
+// on every motion by humanoid_mpc_bench.
 TEST(HumanoidClosedLoop, CoarseFastCostsNoMoreThanCoarseOnStanding) {
   const Motion m = motion("I-standing");
   double cost[kMpcKinds];

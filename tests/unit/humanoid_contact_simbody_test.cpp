@@ -1,8 +1,8 @@
 // Our smooth ground contact (contact.hpp, stepped by step.hpp) against Simbody's own compliant
-// contact on the same model (SimbodyHumanoid with ground contact): a qualitative comparison
-// (issue 5: "contact forces are compared qualitatively (standing load ~ m g)"). Both start
-// from standing_state at the 0.85 m standing height of Table 2.2 and are held for 1 s by the
-// same joint torques computed from each one's own state every 1 ms; after that both carry the
+// contact on the same model (SimbodyHumanoid with ground contact): a qualitative comparison,
+// since the two contact models differ (standing load ~ m g, split alike). Both start from
+// standing_state at the 0.85 m standing height of Table 2.2 and are held for 1 s by the same
+// joint torques computed from each one's own state every 1 ms; after that both carry the
 // weight, split it alike between the feet, stand at the same height and have not slid.
 #include <gtest/gtest.h>
 
@@ -179,7 +179,7 @@ void expect_alike(const Outcome& out) {
   EXPECT_LT(out.simbody.slide, 0.01);
 }
 
-// The issue's case: standing_state (soles sunk by W / 8k, at rest), held.
+// The main case: standing_state (soles sunk by W / 8k, at rest), held.
 TEST(HumanoidContactSimbody, HoldsStandingLikeSimbody) {
   const State pose = standing_state(ProblemConfig{}, kStandingHeight);
   expect_alike(run("standing", pose, pose));

@@ -24,7 +24,7 @@ using namespace hmpc::humanoid;
 namespace heap_monitor = hmpc::platform::heap_monitor;
 
 constexpr int kRandomStates = 50;
-constexpr double kAgreement = 1e-9;  // relative, the requirement
+constexpr double kAgreement = 1e-9;  // relative: the same model, so only round-off differs
 
 template <int A>
 struct RandomState {

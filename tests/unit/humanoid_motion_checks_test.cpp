@@ -1,7 +1,7 @@
-// The physical checks of issue 5 for the humanoid's dynamic motions (II-VIII), whole-body
-// reaching with the robot with an arm, and a push recovery, each a closed-loop run under Coarse-Fast MPC (closed_loop.hpp), untruncated
-// (test::run). Label long: minutes under AddressSanitizer, which CI's host-asan preset skips;
-// host-release runs them.
+// Physical checks that the humanoid's dynamic motions (II-VIII), whole-body reaching with the
+// robot with an arm, and a push recovery really happen, each a closed-loop run under
+// Coarse-Fast MPC (closed_loop.hpp), untruncated (test::run). Label long: minutes under
+// AddressSanitizer, which CI's host-asan preset skips; host-release runs them.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -28,32 +28,32 @@ ClosedLoopRun expect_check_passes(const std::string& name) {
   return r;
 }
 
-// Motion IV (issue 5's check): sits down to the chair, the seat carrying at least half the
-// weight with the base point at most 0.72 m (physical_checks.cpp), then stands: the last
-// 0.3 s in the standing band 0.85 +- 0.05 m with the seat unloaded.
+// Motion IV: sits down to the chair, the seat carrying at least half the weight with the base
+// point at most 0.72 m (physical_checks.cpp), then stands: the last 0.3 s in the standing band
+// 0.85 +- 0.05 m with the seat unloaded.
 TEST(HumanoidMotionChecks, CoarseFastSitsOnTheChairAndStandsUp) {
   expect_check_passes("IV-sitting");
 }
 
-// Motion II (issue 5's check): mean forward speed from 0.5 s on at least 80 % of the 1.2 m/s
-// target, with at least four touchdowns, alternating.
+// Motion II: mean forward speed from 0.5 s on at least 80 % of the 1.2 m/s target, with at
+// least four touchdowns, alternating.
 TEST(HumanoidMotionChecks, CoarseFastWalks) {
   expect_check_passes("II-walking");
 }
 
-// Motion III (issue 5's check): motion II's checks at III's 2 m/s, and flight phases: at
-// least 3 samples (90 ms) with both feet unloaded.
+// Motion III: motion II's checks at III's 2 m/s, and flight phases: at least 3 samples (90 ms)
+// with both feet unloaded.
 TEST(HumanoidMotionChecks, CoarseFastRuns) {
   expect_check_passes("III-running");
 }
 
-// Motion V (issue 5's check): a flight phase with both feet unloaded for at least 60 ms, then
-// the last 0.3 s on its feet, upright, in the standing band.
+// Motion V: a flight phase with both feet unloaded for at least 60 ms, then the last 0.3 s on
+// its feet, upright, in the standing band.
 TEST(HumanoidMotionChecks, CoarseFastJumpsAndLandsUpright) {
   expect_check_passes("V-low-jump");
 }
 
-// Motion VII (issue 5's check): motion V's checks, and higher than V (apex of the base point).
+// Motion VII: motion V's checks, and higher than V (apex of the base point).
 TEST(HumanoidMotionChecks, CoarseFastJumpsHigherThanTheLowJump) {
   const double high = apex_height(expect_check_passes("VII-high-jump"));
   const double low = apex_height(run(motion("V-low-jump"), MpcKind::kCoarseFast, motion("V-low-jump").duration));
@@ -61,19 +61,19 @@ TEST(HumanoidMotionChecks, CoarseFastJumpsHigherThanTheLowJump) {
   EXPECT_GT(high, low);
 }
 
-// Motion VI (issue 5's check): motion V's checks, and the yaw turned by pi +- 0.3 rad.
+// Motion VI: motion V's checks, and the yaw turned by pi +- 0.3 rad.
 TEST(HumanoidMotionChecks, CoarseFastJumpsWithAHalfTurn) {
   expect_check_passes("VI-half-turn-jump");
 }
 
-// Motion VIII (issue 5's check): a flight, the pitch turned by two full rotations (at least
-// 4 pi - 0.5 rad), then the last 0.3 s on its feet, upright, in the standing band.
+// Motion VIII: a flight, the pitch turned by two full rotations (at least 4 pi - 0.5 rad), then
+// the last 0.3 s on its feet, upright, in the standing band.
 TEST(HumanoidMotionChecks, CoarseFastDoesADoubleFlipAndLandsUpright) {
   expect_check_passes("VIII-double-flip");
 }
 
-// Reaching (issue 5's check, Eq. 2.53): the robot with an arm steps towards the target and
-// brings its hand's centre within 5 cm of it, without a fall over the motion's 4 s.
+// Reaching (Eq. 2.53): the robot with an arm steps towards the target and brings its hand's
+// centre within 5 cm of it, without a fall over the motion's 4 s.
 TEST(HumanoidMotionChecks, CoarseFastReachesTheTarget) {
   const Motion m = motion("reaching");
   const ArmClosedLoopRun r = run<1>(m, MpcKind::kCoarseFast, m.duration);

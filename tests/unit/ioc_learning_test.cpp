@@ -1,5 +1,5 @@
-// Inverse optimal control (issue 6) learning the weights of the robot's own MPC: from the
-// Coarse MPC's plans along a jump (the issue's recovery check) and from executed jumps.
+// Inverse optimal control (Ch. 4) learning the weights of the robot's own MPC: from the
+// Coarse MPC's plans along a jump (known weights recovered) and from executed jumps.
 // Seconds natively, minutes under AddressSanitizer: labelled long (tests/CMakeLists.txt).
 #include <gtest/gtest.h>
 
@@ -36,9 +36,9 @@ LearnResult learn_and_print(const LocalIoc& ioc, const Weights& truth) {
   return result;
 }
 
-// The issue's check: the robot's own MPC under known weights, no noise; recovered up to scale
-// with cosine similarity >= 0.95. The demonstrations are the Coarse MPC's plans along a jump,
-// one window each (100).
+// Recovery: the robot's own MPC under known weights, no noise; recovered up to scale with
+// cosine similarity >= 0.95. The demonstrations are the Coarse MPC's plans along a jump, one
+// window each (100).
 TEST(LocalIoc, RecoversTheWeightsOfTheRobotsOwnMpcFromItsPlans) {
   const Motion motion = jump_motion();
   ClosedLoopConfig config;

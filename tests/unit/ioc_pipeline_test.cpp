@@ -69,8 +69,8 @@ MotionErrors generate(const Task& task, const Weights& weights) {
 void expect_learned_beats_initial(const Task& task) {
   // The torque weights' proportions come nearer the demonstrator's (measured with 8 captures:
   // jumping 0.33 against the initial weights' 0.59, squatting 0.07 against 0.26). The state
-  // weights come out 2-100 times too small relative to them (see the closing notes of issue 6);
-  // not asserted.
+  // weights come out 2-100 times too small relative to them (local IOC reads a demonstration's
+  // distance from a local optimum as weaker state costs); not asserted.
   EXPECT_LT(torque_proportion_error(task.learned, task.hidden), torque_proportion_error(initial_weights(), task.hidden));
   // Figs. 4.4-4.5: the motion generated with the learned weights is nearer the demonstrated
   // one than with the initial weights (with which the robot falls).
@@ -99,14 +99,14 @@ TEST(IocPipeline, JumpingAndSquattingFromTheHumanDemonstrator) {
     SCOPED_TRACE("squatting");
     expect_learned_beats_initial(squatting);
   }
-  // Jumping and squatting learn different weights: not the same up to scale (the issue's
-  // threshold for that is a cosine similarity of 0.95; both start from the initial weights,
-  // cosine 1; measured 0.55), and the torque weights' proportions differ between the tasks the
-  // way the demonstrator's do: the learned jumping / squatting ratios are nearer the hidden ones
-  // than equal proportions are (measured 0.23 against 0.36). Each task's learned torque
-  // proportions are not always nearer its own demonstrator's than the other task's (squatting:
-  // 0.132 either way), and the state weights' differences do not follow the hidden ones
-  // (closing notes of issue 6): neither is asserted.
+  // Jumping and squatting learn different weights: not the same up to scale (the threshold for
+  // that is a cosine similarity of 0.95; both start from the initial weights, cosine 1;
+  // measured 0.55), and the torque weights' proportions differ between the tasks the way the
+  // demonstrator's do: the learned jumping / squatting ratios are nearer the hidden ones than
+  // equal proportions are (measured 0.23 against 0.36). Each task's learned torque proportions
+  // are not always nearer its own demonstrator's than the other task's (squatting: 0.132 either
+  // way), and the state weights' differences do not follow the hidden ones (they come out too
+  // small, as above): neither is asserted.
   const double cosine = cosine_similarity(jumping.learned, squatting.learned);
   const Weights hidden_ratio = jumping.hidden.cwiseQuotient(squatting.hidden);
   const double ratio_error = torque_proportion_error(jumping.learned.cwiseQuotient(squatting.learned), hidden_ratio);

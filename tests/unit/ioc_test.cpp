@@ -1,4 +1,4 @@
-// Inverse optimal control (issue 6): L-BFGS, the local IOC likelihood's gradient against
+// Inverse optimal control (Ch. 4): L-BFGS, the local IOC likelihood's gradient against
 // finite differences, bad demonstrations and weights, the file formats. Learning from the
 // robot's own MPC: ioc_learning_test.cpp.
 #include <gtest/gtest.h>

@@ -20,7 +20,7 @@ using State = Pid::State;
 using Fault = Pid::Fault;
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kDt = 1e-3;  // 1 kHz, the joint boards' PID rate (DESIGN.md §3.2)
+constexpr double kDt = 1e-3;  // 1 kHz, the boards' control tick
 
 Config wide_limits() {
   Config c;
@@ -492,8 +492,8 @@ RejectionResult compare(const ValveActuator& plant, double velocity_gain) {
 // command's lag behind the velocity (half a 1 ms sample of hold plus the 1 ms spool): a
 // residual of about 2 pi f * 1.5 ms ~ 2 % of the plain PID's disturbance. Plain PID leaves
 // |k_v omega| / |k_q (kp + ki / jw)| ~ 9 N·m of error amplitude (6.4 N·m RMS) at 2 Hz. Tested:
-// the claim, LVF at least halves the error, and the ratio within 5x of that 2 %
-// estimate. The printed ratio is the measurement.
+// LVF at least halves the error, and the ratio is within 5x of that 2 % estimate. The printed
+// ratio is the measurement.
 TEST(LoadVelocityFeedbackPid, RejectsImposedLoadVelocityBetterThanPlainPid) {
   const ValveActuator plant;
   const RejectionResult r = compare(plant, plant.k_v / plant.k_q);

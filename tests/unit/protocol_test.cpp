@@ -578,7 +578,7 @@ TEST(ProtocolCounters, RejectCountersCountEachClass) {
 
 // ---------------------------------------------------------------------------------------
 
-// DESIGN.md §3.3 asks for the bus load of each setup; this prints it and pins the sum.
+// The bus load of each setup, robot and HIL: printed as a figure, the sum pinned.
 TEST(ProtocolBusLoad, RobotAndHilSetups) {
   // Per second: robot 100 + 250 + 100 + 3 * 250 frames; HIL adds 3 * 1000 plant frames
   // (Sensor, ActuatorCommand, Sync).

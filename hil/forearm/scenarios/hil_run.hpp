@@ -1,5 +1,5 @@
-// One forearm HIL run over CAN (issue 4): the three programs a lab would run, as separate
-// processes on one SocketCAN interface (vcan0 through hil/vcan/run-with-vcan.sh) in lock-step:
+// One forearm HIL run over CAN: the three programs a lab would run, as separate processes on
+// one SocketCAN interface (vcan0 through hil/vcan/run-with-vcan.sh) in lock-step:
 //   hmpc-forearm-board  --lockstep --emulate-target cortex-m7   (the firmware, Linux build)
 //   hmpc-forearm-host   --lockstep --run STRATEGY ...            (CAN master, target stream)
 //   hmpc-forearm-plant  --lockstep --wait-host ...               (Simbody forearm)

@@ -1,6 +1,6 @@
-// hmpc-forearm-hil: the forearm experiments of the thesis's Sec. 3.4 over CAN (issue 4). For
-// every strategy x target frequency x trial, runs board, host and Simbody plant in lock-step
-// on vcan0 (run it through hil/vcan/run-with-vcan.sh) and writes, to --out:
+// hmpc-forearm-hil: the forearm experiments of the thesis's Sec. 3.4 over CAN. For every
+// strategy x target frequency x trial, runs board, host and Simbody plant in lock-step on vcan0
+// (run it through hil/vcan/run-with-vcan.sh) and writes, to --out:
 //   runs/<strategy>_<f>hz_<trial>/   each run's logs (plant.csv, host.csv) and program output
 //   hil_runs.csv                     one row of figures per run
 //   hil_summary.md                   mean and standard deviation over trials (Fig. 3.3 data)
@@ -35,7 +35,7 @@ using hmpc::hil::HilRunSpec;
 constexpr const char* kProgram = "hmpc-forearm-hil";
 // The thesis's weights of Fig. 3.4.
 constexpr double kSweepWeights[] = {0.02, 0.002, 0.0002};
-// The default run has the modest plant-model mismatch the issue asks for: a heavier forearm
+// The default run has a modest plant-model mismatch, as a real arm has: a heavier forearm
 // (a hand-held load of ~5 % of its mass), more friction (a worn bearing), a slower valve.
 constexpr hmpc::hil::ForearmMismatch kDefaultMismatch{1.05, 1.2, 1.1};
 

@@ -1,5 +1,5 @@
-// CAN protocol of the forearm actuator board (DESIGN.md §3.3): the one source of truth for
-// frame ids, signal layouts, scaling, units and ranges, and the codec that uses them.
+// CAN protocol of the forearm actuator board: the one source of truth for frame ids, signal
+// layouts, scaling, units and ranges, and the codec that uses them.
 // common/protocol/hmpc_forearm.dbc describes the same frames for cantools or SavvyCAN;
 // tests/unit/dbc_test.cpp keeps it in agreement with kFrames and kSignals below.
 //
@@ -138,7 +138,7 @@ constexpr bool identify(std::uint32_t id, FrameType& type, NodeId& node) {
 // Mode the host asks for. 0 is no request, so an all-zero payload never commands anything.
 enum class RequestedMode : std::uint8_t { kIdle = 1, kHold = 2, kRun = 3 };
 
-// Mode the board is in (DESIGN.md §3.2 state machine).
+// Mode the board is in: boot -> idle (safe outputs) -> hold (PID) -> run (MPC), and fault.
 enum class BoardMode : std::uint8_t { kBoot = 0, kIdle = 1, kHold = 2, kRun = 3, kFault = 4 };
 
 // Control strategies of the thesis's Table 3.1.
@@ -275,10 +275,10 @@ struct SignalSpec {
   EnumValueList values;  // kMode and kEnumeration only
 };
 
-// Resolution is the factor. Ranges (DESIGN.md and issue 3): theta [-pi, pi] rad (to the
-// next grid step), theta_dot [-20, 20] rad/s, P [0, 0.8] MPa, v_p [0, 5] V, v_m [-5, 5] V,
-// torques [-30, 30] N.m. ActuatorCommand carries the voltages at 16 bits since the plant
-// applies them; ActuatorOutputs, telemetry that also needs both torques, at 12 bits (the
+// Resolution is the factor. Ranges: theta [-pi, pi] rad (to the next grid step), theta_dot
+// [-20, 20] rad/s, P [0, 0.8] MPa, v_p [0, 5] V, v_m [-5, 5] V (the thesis's input limits,
+// Sec. 3.3), torques [-30, 30] N.m. ActuatorCommand carries the voltages at 16 bits since the
+// plant applies them; ActuatorOutputs, telemetry that also needs both torques, at 12 bits (the
 // resolution of a typical valve DAC). Gains: the hold-mode joint PID with load-velocity
 // feedback (thesis Sec. 2.7.3), output = kp e + ki integral(e) + kd de/dt + k_lv theta_dot,
 // e = theta_d - theta in rad, output a valve command in V.

@@ -1,7 +1,7 @@
-// The host's side of the forearm board's CAN protocol (issue 4), independent of the bus: what
-// to send when (heartbeat with the requested mode and strategy, target trajectory samples
-// streamed ahead of the board's MPC horizon) and what the board last reported. The host
-// program (host/apps/hmpc_forearm_host.cpp) moves its frames on SocketCAN and bridges to DDS.
+// The host's side of the forearm board's CAN protocol, independent of the bus: what to send
+// when (heartbeat with the requested mode and strategy, target trajectory samples streamed
+// ahead of the board's MPC horizon) and what the board last reported. The host program
+// (host/apps/hmpc_forearm_host.cpp) moves its frames on SocketCAN and bridges to DDS.
 //
 // Everything goes out on heartbeat ticks, every 10 ms: samples first, then the ModeCommand.
 // In HIL lock-step, where the plant waits for the heartbeat, the board therefore sees each

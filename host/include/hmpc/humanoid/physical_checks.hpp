@@ -1,5 +1,5 @@
-// Did the motion really happen? Issue 5's physical checks of a closed-loop run
-// (closed_loop.hpp), one per motion of Tables 2.2-2.3, with thresholds from physics:
+// Did the motion really happen? Physical checks of a closed-loop run (closed_loop.hpp), one per
+// motion of Tables 2.2-2.3, with thresholds from physics:
 //   I     standing: base point at 0.85 +- 0.05 m throughout (Table 2.2's target; 5 cm is a
 //         knee bend of a few degrees, a fall leaves it within a few hundred ms);
 //   II    walking at 1.2 m/s, III running at 2.0 m/s: mean forward speed after the first
@@ -17,8 +17,8 @@
 //   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
 //         full rotations), a flight phase, and an upright landing as for V-VII;
 //   reaching (Sec. 2.6.1, Eq. 2.53; the robot with an arm): the hand's centre within 5 cm of
-//         the target at a sample after the reach starts (the issue's threshold: a hand's
-//         half-width, so the palm touches a ball there).
+//         the target at a sample after the reach starts (5 cm: a hand's half-width, so the
+//         palm touches a ball there).
 // Every motion also must not have fallen (closed_loop.hpp's fallen_clearance).
 #pragma once
 

@@ -1,7 +1,7 @@
-// Demonstrations by the robot's own MPC under known weights (issue 6's recovery check): the
-// plans the Coarse MPC made along a closed-loop run, each an N-step window that its iLQR
-// optimised from the measured state, as opposed to the run's executed trajectory, whose
-// windows string together the first steps of different plans.
+// Demonstrations by the robot's own MPC under known weights (to check that IOC recovers them):
+// the plans the Coarse MPC made along a closed-loop run, each an N-step window that its iLQR
+// optimised from the measured state, as opposed to the run's executed trajectory, whose windows
+// string together the first steps of different plans.
 #pragma once
 
 #include <vector>

@@ -1,5 +1,6 @@
 // Counts heap allocations while armed, so a Linux program or test can show that a control
-// loop made none (DESIGN.md §2). Link the CMake target hmpc::heap_monitor: it wraps the C
+// loop made none (common and firmware never allocate: a control step must not wait on, or
+// fail in, the allocator). Link the CMake target hmpc::heap_monitor: it wraps the C
 // allocator (--wrap=malloc,...) and routes operator new through it.
 #pragma once
 

@@ -1,5 +1,5 @@
-// The forearm host controller's DDS interface (DESIGN.md §3.7): board state and MPC telemetry
-// out, operator commands in, over Cyclone DDS with the types of host/dds/forearm.idl.
+// The forearm host controller's DDS interface: board state and MPC telemetry out, operator
+// commands in, over Cyclone DDS with the types of host/dds/forearm.idl.
 //
 // Users see only the plain structs below; the DDS types stay inside the library. Enumerated
 // fields carry the CAN protocol's enums (hmpc/protocol/forearm_protocol.hpp) and may hold any
