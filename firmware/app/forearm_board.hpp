@@ -281,6 +281,11 @@ class ForearmBoard {
   const BoardCounters& counters() const { return counters_; }
   const proto::RejectCounters& rejects() const { return receiver_.rejects; }
   std::uint32_t ticks() const { return ticks_; }
+  // Ticks since the last accepted heartbeat and sensor reading: what the watchdogs compare
+  // with their timeouts (logged, so a trip's latency can be read off the log).
+  std::uint32_t heartbeat_age() const { return ticks_ - last_heartbeat_tick_; }
+  std::uint32_t sensor_age() const { return ticks_ - last_sensor_tick_; }
+  const Config& config() const { return config_; }
   std::uint32_t dropped_frames() const { return dropped_frames_; }
   // The last MPC step, as an MPC reports it (for telemetry and compute accounting).
   int last_iterations() const { return last_iterations_; }

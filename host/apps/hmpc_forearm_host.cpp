@@ -24,6 +24,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "fault_injector.hpp"
@@ -207,10 +208,14 @@ class Host {
     master_.tick(t, heartbeat, [&](const auto& message) {
       proto::Frame frame;
       if (sender_.encode(message, frame) != proto::EncodeResult::kOk) return;
+      const std::uint64_t corrupted_before = faults_.counters().corrupted;
       if (faults_.apply(t, frame) == hmpc::hil::FaultAction::kDrop) return;
       const CanResult sent = can_.send(hmpc::platform::to_can_frame(frame));
       if (sent.ok()) {
         ++frames_sent_;
+        if constexpr (std::is_same_v<std::decay_t<decltype(message)>, proto::ModeCommand>) {
+          if (faults_.counters().corrupted == corrupted_before) on_intact_heartbeat(message, t);
+        }
       } else if (sent.status != CanStatus::kWouldBlock &&
                  sent.status != CanStatus::kTransmitQueueFull) {
         error = "sending failed: " + describe(sent);
@@ -256,7 +261,8 @@ class Host {
         "board_watchdog_trips=%u board_solver_failures=%u board_overruns=%u "
         "telemetry_frames=%llu solves=%llu solve_time_max_us=%.0f solve_time_median_us=%.0f "
         "host_rejected_frames=%u frames_dropped=%llu frames_corrupted=%llu frames_silenced=%llu "
-        "dds_commands=%llu dds_rejected_commands=%llu\n",
+        "dds_commands=%llu dds_rejected_commands=%llu heartbeat_max_gap_ms=%.0f "
+        "last_heartbeat_s=%.3f\n",
         kProgram, now_s_, wall_s, run_start_s_, run_stop_s_,
         static_cast<unsigned long long>(frames_sent_),
         static_cast<unsigned long long>(frames_received_),
@@ -272,7 +278,8 @@ class Host {
         static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
         static_cast<unsigned long long>(f.silenced),
         static_cast<unsigned long long>(dds_commands_),
-        static_cast<unsigned long long>(dds_ ? dds_->rejected_commands() : 0));
+        static_cast<unsigned long long>(dds_ ? dds_->rejected_commands() : 0),
+        heartbeat_max_gap_s_ * 1e3, last_heartbeat_s_);
   }
 
  private:
@@ -313,6 +320,18 @@ class Host {
       // Run holding the current angle: the board holds where it is when it has no samples.
       master_.stop_streaming();
     }
+  }
+
+  // The last heartbeat that reached the bus intact, and the longest interval between such
+  // heartbeats while the host asked for hold or run, the modes in which the board's heartbeat
+  // watchdog runs: the board must fault exactly when that interval exceeds its timeout.
+  void on_intact_heartbeat(const proto::ModeCommand& m, double t) {
+    const bool active = m.mode == proto::RequestedMode::kHold || m.mode == proto::RequestedMode::kRun;
+    if (active && last_active_heartbeat_s_ >= 0) {
+      heartbeat_max_gap_s_ = std::max(heartbeat_max_gap_s_, t - last_active_heartbeat_s_);
+    }
+    last_active_heartbeat_s_ = active ? t : -1;
+    last_heartbeat_s_ = t;
   }
 
   void on_telemetry() {
@@ -370,6 +389,7 @@ class Host {
   hmpc::hil::FaultInjector faults_;
   double now_s_ = 0;
   double run_start_s_ = -1, run_stop_s_ = -1, run_end_s_ = -1;
+  double last_active_heartbeat_s_ = -1, heartbeat_max_gap_s_ = 0, last_heartbeat_s_ = -1;
   std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
   std::uint64_t dds_commands_ = 0;
   SolveTimeHistogram solve_times_;

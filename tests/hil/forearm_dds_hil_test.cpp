@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "child_process.hpp"
@@ -87,12 +89,36 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
   EXPECT_TRUE(await_mode(client, proto::BoardMode::kRun, proto::Strategy::kCoarse20ms))
       << "the board never ran Coarse 20 ms";
 
-  // NaN amplitude: the host's bridge rejects it; the board keeps running as it was.
+  // NaN amplitude: the host's bridge rejects it; the board keeps running as it was, with the
+  // same strategy and the same 20 deg target, for the 0.2 s of host time watched after the
+  // host has said so (50 MPC periods, time enough for a command acted on to show).
   ASSERT_EQ(run_cli({"--raw-sample", "run", "--strategy", "two_stage", "--sine", "nan", "1"},
                     output), 0)
       << output;
-  // A valid command after it proves the bridge is still listening, and that the rejected
-  // one changed nothing in between.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+  while (host.errors().find("amplitude") == std::string::npos &&
+         std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_NE(host.errors().find("amplitude"), std::string::npos)
+      << "the host never rejected the command: " << host.errors();
+  double first_s = -1, last_s = -1;
+  int watched = 0, unchanged = 0;
+  while (!(last_s - first_s >= 0.2) && std::chrono::steady_clock::now() < give_up) {
+    client.wait_for_data(1.0);
+    client.poll_state([&](const hmpc::dds::ForearmStateSample& s) {
+      if (first_s < 0) first_s = s.board_time_s;
+      last_s = s.board_time_s;
+      ++watched;
+      unchanged += s.mode == proto::BoardMode::kRun && s.strategy == proto::Strategy::kCoarse20ms &&
+                   std::abs(s.theta_d) <= 20 * M_PI / 180 + 1e-6;
+    });
+    client.poll_telemetry([](const hmpc::dds::ForearmTelemetrySample&) {});
+  }
+  EXPECT_GE(last_s - first_s, 0.2) << "too few states after the rejected command";
+  EXPECT_GT(watched, 0);
+  EXPECT_EQ(unchanged, watched) << "the rejected command changed the board's mode, strategy or target";
+  // A valid command after it proves the bridge is still listening.
   ASSERT_EQ(run_cli({"idle"}, output), 0) << output;
   EXPECT_TRUE(await_mode(client, proto::BoardMode::kIdle)) << "the board never went idle";
 

@@ -124,12 +124,14 @@ TEST(HumanoidPhysicalChecks, MotionNumerals) {
   EXPECT_FALSE(check_motion("IX", Motion{}, ClosedLoopRun{}).passed);
 }
 
-// Figs. 2.10/2.12's ordering on motion I: Coarse-Fast's accumulated cost not above Coarse's,
-// and within 10 % of Fine's. Not strictly below: with the joints' armature (parameters.hpp)
-// the Coarse plan of quiet standing leaves the lower layer nothing to refine (its first
-// iteration meets the tolerance), so the two costs are equal; the strict ordering is measured
-// on every motion by humanoid_mpc_bench.
-TEST(HumanoidClosedLoop, CoarseFastCostsNoMoreThanCoarseOnStanding) {
+// Figs. 2.10/2.12 on motion I: Coarse-Fast's accumulated cost within 10 % of Fine's. Its
+// ordering against Coarse is not asserted: on quiet standing the lower layer's first iteration
+// meets its tolerance and Coarse-Fast flies Coarse's plan (equal costs, 46.84 both), and from
+// perturbed starts the ordering goes either way (0.3 m/s forward: Coarse-Fast 202.6 against
+// Coarse 186.1; 0.3 m/s forward and 0.2 m/s sideways: 132.8 against 212.6), so a check of it
+// would hold only while the lower layer does nothing. humanoid_mpc_bench prints the ordering
+// on every motion from five perturbed starts.
+TEST(HumanoidClosedLoop, CoarseFastCostsWithinTenPercentOfFineOnStanding) {
   const Motion m = motion("I-standing");
   double cost[kMpcKinds];
   for (int kind = 0; kind < kMpcKinds; ++kind) {
@@ -142,7 +144,6 @@ TEST(HumanoidClosedLoop, CoarseFastCostsNoMoreThanCoarseOnStanding) {
   const double coarse_fast = cost[static_cast<int>(MpcKind::kCoarseFast)];
   std::printf("motion I cost: Fine %.3f, Coarse %.3f (%.4f x Fine), Coarse-Fast %.3f (%.4f x Fine)\n",
               fine, coarse, coarse / fine, coarse_fast, coarse_fast / fine);
-  EXPECT_LE(coarse_fast, coarse);
   EXPECT_LT(coarse_fast, 1.1 * fine);
 }
 

@@ -118,7 +118,8 @@ class BoardLoop {
     ++stats_.ticks;
     const auto& out = board_.outputs();
     log_.record({board_.ticks(), float(wall_time_s), board_.mode(), board_.faults(),
-                 board_.strategy(), float(out.v_p), float(out.v_m)});
+                 board_.strategy(), float(out.v_p), float(out.v_m), board_.heartbeat_age(),
+                 board_.sensor_age()});
     proto::Frame frame;
     while (board_.pop_frame(frame)) transmit(frame);
     return board_.mpc_due();
@@ -343,7 +344,8 @@ int main(int argc, char** argv) {
       "mpc_steps=%u solver_failures=%u mpc_overruns=%u fallbacks=%u watchdog_trips=%u "
       "sensor_timeouts=%u refused_commands=%u rejected_frames=%u dropped_frames=%u "
       "transmit_failures=%llu timer_overruns=%llu max_busy_ms=%.3f max_wakeup_latency_ms=%.3f "
-      "heap_allocations_in_loop=%llu safe_outputs_sent=%d\n",
+      "heap_allocations_in_loop=%llu safe_outputs_sent=%d heartbeat_timeout_ticks=%d "
+      "sensor_timeout_ticks=%d\n",
       kProgram, static_cast<unsigned long long>(stats.ticks), elapsed_s,
       elapsed_s > 0 ? double(stats.ticks) / elapsed_s : 0.0,
       value_name(proto::kBoardModeValues, std::uint32_t(board.mode())), unsigned(board.faults()),
@@ -352,7 +354,8 @@ int main(int argc, char** argv) {
       board.dropped_frames(), static_cast<unsigned long long>(stats.transmit_failures),
       static_cast<unsigned long long>(stats.timer_overruns), stats.max_busy_s * 1e3,
       stats.max_wakeup_latency_s * 1e3,
-      static_cast<unsigned long long>(heap_monitor::allocations()), safe_sent ? 1 : 0);
+      static_cast<unsigned long long>(heap_monitor::allocations()), safe_sent ? 1 : 0,
+      config.heartbeat_timeout_ticks, config.sensor_timeout_ticks);
   if (log.is_open()) {
     if (log.dropped_rows() > 0) {
       std::printf("%s: log kept the last %d minutes (%llu earlier ticks not written)\n", kProgram,

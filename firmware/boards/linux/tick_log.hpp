@@ -26,6 +26,7 @@ class TickLog {
     std::uint8_t faults;
     forearm_protocol::Strategy strategy;
     float v_p, v_m;  // V, the outputs applied this tick
+    std::uint32_t heartbeat_age, sensor_age;  // ticks since the last accepted one
   };
 
   TickLog() = default;
@@ -63,15 +64,15 @@ class TickLog {
   // DBC names, so the CSV reads like a decoded bus trace.
   bool write_csv(std::string& error) {
     if (file_ == nullptr) return true;
-    std::fprintf(file_, "tick,wall_time_s,mode,faults,strategy,v_p,v_m\n");
+    std::fprintf(file_, "tick,wall_time_s,mode,faults,strategy,v_p,v_m,heartbeat_age,sensor_age\n");
     const std::uint64_t first = dropped_rows();
     for (std::uint64_t i = first; i < recorded_; ++i) {
       const Row& r = rows_[i % rows_.size()];
-      std::fprintf(file_, "%u,%.6f,%s,%u,%s,%.4f,%.4f\n", r.tick, double(r.wall_time_s),
+      std::fprintf(file_, "%u,%.6f,%s,%u,%s,%.4f,%.4f,%u,%u\n", r.tick, double(r.wall_time_s),
                    value_name(forearm_protocol::kBoardModeValues, std::uint32_t(r.mode)),
                    unsigned(r.faults),
                    value_name(forearm_protocol::kStrategyValues, std::uint32_t(r.strategy)),
-                   double(r.v_p), double(r.v_m));
+                   double(r.v_p), double(r.v_m), r.heartbeat_age, r.sensor_age);
     }
     const bool written = std::ferror(file_) == 0;
     const bool closed = std::fclose(file_) == 0;

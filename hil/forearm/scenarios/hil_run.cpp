@@ -26,10 +26,6 @@ std::string number_text(double v) {
   return s.str();
 }
 
-struct PlantRow {
-  double time, theta, theta_dot, pressure_bar, v_p, v_m, tau_p, tau_m;
-};
-
 bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::string& error) {
   std::ifstream in(path);
   std::string line;
@@ -44,6 +40,28 @@ bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::s
       error = "plant log " + path + ": malformed row '" + line + "'";
       return false;
     }
+    rows.push_back(r);
+  }
+  return true;
+}
+
+bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, std::string& error) {
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line)) {
+    error = "board log " + path + " is empty";
+    return false;
+  }
+  while (std::getline(in, line)) {
+    BoardTickRow r;
+    char mode[16] = {}, strategy[16] = {};
+    double wall = 0;
+    if (std::sscanf(line.c_str(), "%u,%lf,%15[^,],%u,%15[^,],%lf,%lf,%u,%u", &r.tick, &wall, mode,
+                    &r.faults, strategy, &r.v_p, &r.v_m, &r.heartbeat_age, &r.sensor_age) != 9) {
+      error = "board log " + path + ": malformed row '" + line + "'";
+      return false;
+    }
+    r.mode = mode;
     rows.push_back(r);
   }
   return true;
@@ -87,7 +105,7 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
 
   const std::string node = std::to_string(spec.node);
   std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7", "--node",
-                                      node};
+                                      node, "--log", dir + "board.csv"};
   if (spec.w_v > 0) {
     board_args.push_back("--w-v");
     board_args.push_back(number_text(spec.w_v));
@@ -130,8 +148,11 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
     return result;
   }
 
-  std::vector<PlantRow> rows;
-  if (!read_plant_log(dir + "plant.csv", rows, result.error)) return result;
+  if (!read_plant_log(dir + "plant.csv", result.plant_log, result.error) ||
+      !read_board_log(dir + "board.csv", result.board_log, result.error)) {
+    return result;
+  }
+  const std::vector<PlantRow>& rows = result.plant_log;
   const double t0 = result.number(result.host, "run_start_s");
   if (!(t0 >= 0)) {
     result.error = "the host never started the run (run_start_s missing)";

@@ -41,6 +41,22 @@ struct HilRunSpec {
   std::string directory;          // where logs and program outputs go (created)
 };
 
+// A row of the plant's log: the state at `time` and the inputs applied during the millisecond
+// before it (row k of a lock-step run: step k, driven by the board's answer to Sync k, which
+// the board computed in its tick k + 1).
+struct PlantRow {
+  double time, theta, theta_dot, pressure_bar, v_p, v_m, tau_p, tau_m;
+};
+
+// A row of the board's tick log.
+struct BoardTickRow {
+  std::uint32_t tick = 0;
+  std::string mode;
+  unsigned faults = 0;
+  double v_p = 0, v_m = 0;
+  std::uint32_t heartbeat_age = 0, sensor_age = 0;  // ticks since the last accepted one
+};
+
 struct HilRunResult {
   bool ok = false;
   std::string error;  // why not ok: a program failed, timed out, or a log was unreadable
@@ -53,6 +69,8 @@ struct HilRunResult {
   bool within_stops = false;
   // key=value summaries the programs printed at exit.
   std::map<std::string, std::string> board, plant, host;
+  std::vector<PlantRow> plant_log;
+  std::vector<BoardTickRow> board_log;
   double motor_share() const {
     return mean_abs_motor_torque / (mean_abs_pam_torque + mean_abs_motor_torque);
   }
