@@ -7,6 +7,9 @@ set -euo pipefail
 packages=(
   # host build
   g++ cmake ninja-build make pkgconf
+  # sanitizer and fuzzing builds (clang with its ASan, UBSan, TSan and libFuzzer runtimes;
+  # llvm-symbolizer for their stack traces) and the linters
+  clang libclang-rt-14-dev llvm clang-tidy clang-format cppcheck
   # libraries
   libeigen3-dev googletest libgtest-dev libbenchmark-dev
   # rigid-body reference and HIL plants

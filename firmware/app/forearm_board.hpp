@@ -24,8 +24,8 @@
 #include <type_traits>
 
 #include "hmpc/control/load_velocity_feedback_pid.hpp"
-#include "hmpc/mpc/compute_model.hpp"
 #include "hmpc/models/forearm_mpc.hpp"
+#include "hmpc/mpc/compute_model.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
 namespace hmpc::firmware {
@@ -34,11 +34,13 @@ namespace proto = hmpc::forearm_protocol;
 
 // SolveTelemetry carries hmpc::SolveStatus values as they are.
 static_assert(int(proto::SolveStatusCode::kConverged) == int(SolveStatus::kConverged) &&
-              int(proto::SolveStatusCode::kIterationCap) == int(SolveStatus::kIterationCap) &&
-              int(proto::SolveStatusCode::kBudgetExhausted) == int(SolveStatus::kBudgetExhausted) &&
-              int(proto::SolveStatusCode::kStalled) == int(SolveStatus::kStalled) &&
-              int(proto::SolveStatusCode::kInvalidInput) == int(SolveStatus::kInvalidInput) &&
-              int(proto::SolveStatusCode::kNumericalFailure) == int(SolveStatus::kNumericalFailure),
+                  int(proto::SolveStatusCode::kIterationCap) == int(SolveStatus::kIterationCap) &&
+                  int(proto::SolveStatusCode::kBudgetExhausted) ==
+                      int(SolveStatus::kBudgetExhausted) &&
+                  int(proto::SolveStatusCode::kStalled) == int(SolveStatus::kStalled) &&
+                  int(proto::SolveStatusCode::kInvalidInput) == int(SolveStatus::kInvalidInput) &&
+                  int(proto::SolveStatusCode::kNumericalFailure) ==
+                      int(SolveStatus::kNumericalFailure),
               "protocol solve status codes must match hmpc::SolveStatus");
 
 template <typename Scalar>
@@ -95,7 +97,7 @@ struct BoardCounters {
   std::uint32_t fallbacks = 0;         // run -> hold after repeated bad steps
   std::uint32_t refused_commands = 0;  // valid frames asking for a transition not allowed now
   std::uint32_t mpc_steps = 0;
-  std::uint32_t syncs = 0;             // valid HIL lock-step Sync frames
+  std::uint32_t syncs = 0;  // valid HIL lock-step Sync frames
 };
 
 template <typename Scalar>
@@ -197,8 +199,7 @@ class ForearmBoard {
       case proto::BoardMode::kRun: apply_plan(); break;
       default: outputs_ = {config_.safe_v_p, config_.safe_v_m}; break;
     }
-    mpc_due_ = mode_ == proto::BoardMode::kRun && ticks_ % kTicksPerMpcStep == 0 &&
-               !solve_pending_;
+    mpc_due_ = mode_ == proto::BoardMode::kRun && ticks_ % kTicksPerMpcStep == 0 && !solve_pending_;
     send_telemetry();
   }
 
@@ -255,8 +256,8 @@ class ForearmBoard {
     const bool counts_as_bad = !usable_ || (overrun && !target);
     consecutive_bad_steps_ = counts_as_bad ? consecutive_bad_steps_ + 1 : 0;
     telemetry_.status = static_cast<proto::SolveStatusCode>(status);
-    telemetry_.solve_time_us = static_cast<std::uint16_t>(
-        elapsed * 1e6 < 65535.0 ? elapsed * 1e6 : 65535.0);
+    telemetry_.solve_time_us =
+        static_cast<std::uint16_t>(elapsed * 1e6 < 65535.0 ? elapsed * 1e6 : 65535.0);
     if (consecutive_bad_steps_ >= config_.max_consecutive_bad_steps) {
       ++counters_.fallbacks;
       faults_ |= proto::fault::kSolverFallback;
@@ -335,7 +336,8 @@ class ForearmBoard {
   }
 
   bool sensor_fresh() const {
-    return have_sensor_ && ticks_ - last_sensor_tick_ <= std::uint32_t(config_.sensor_timeout_ticks);
+    return have_sensor_ &&
+           ticks_ - last_sensor_tick_ <= std::uint32_t(config_.sensor_timeout_ticks);
   }
 
   // The host's trajectory clock now: board ticks plus the offset between the clocks.
@@ -484,8 +486,8 @@ class ForearmBoard {
       send(proto::ActuatorOutputs{float(outputs_.v_p), float(outputs_.v_m),
                                   float(clamp(tau_p, Scalar(-30), Scalar(30))),
                                   float(p.motor_gain * outputs_.v_m), 0});
-      telemetry_.tracking_error = float(clamp(target_.angle(host_time()) - x_(0), Scalar(-6.28),
-                                              Scalar(6.28)));
+      telemetry_.tracking_error =
+          float(clamp(target_.angle(host_time()) - x_(0), Scalar(-6.28), Scalar(6.28)));
       if (mode_ != proto::BoardMode::kRun) telemetry_.status = proto::SolveStatusCode::kNoSolve;
       send(telemetry_);
     }

@@ -35,13 +35,30 @@ void SysTick_Handler(void) __attribute__((weak, alias("default_handler")));
 
 typedef void (*vector_t)(void);
 __attribute__((section(".isr_vector"), used)) const vector_t hmpc_vectors[16 + HMPC_NUM_IRQ] = {
-    (vector_t)_estack, Reset_Handler, NMI_Handler, HardFault_Handler, MemManage_Handler,
-    BusFault_Handler, UsageFault_Handler, 0, 0, 0, 0, SVC_Handler, DebugMon_Handler, 0,
-    PendSV_Handler, SysTick_Handler, [16 ... 16 + HMPC_NUM_IRQ - 1] = default_handler,
+    (vector_t)_estack,
+    Reset_Handler,
+    NMI_Handler,
+    HardFault_Handler,
+    MemManage_Handler,
+    BusFault_Handler,
+    UsageFault_Handler,
+    0,
+    0,
+    0,
+    0,
+    SVC_Handler,
+    DebugMon_Handler,
+    0,
+    PendSV_Handler,
+    SysTick_Handler,
+    [16 ... 16 + HMPC_NUM_IRQ - 1] = default_handler,
 };
 
 static __attribute__((noreturn, used)) void reset_continue(void) {
+  /* The linker script's section bounds: one region each, which cppcheck cannot know. */
+  /* cppcheck-suppress comparePointers */
   for (uint32_t *src = _sidata, *dst = _sdata; dst < _edata;) *dst++ = *src++;
+  /* cppcheck-suppress comparePointers */
   for (uint32_t *dst = _sbss; dst < _ebss;) *dst++ = 0;
   uint32_t *sp;
   __asm__ volatile("mov %0, sp" : "=r"(sp));
@@ -69,6 +86,7 @@ __attribute__((naked, noreturn)) void Reset_Handler(void) {
 /* Bytes of stack ever used: the painted words the stack never overwrote are unused. */
 uint32_t hmpc_stack_high_water(void) {
   const uint32_t *p = _sstack;
+  /* cppcheck-suppress comparePointers ; both bound the one stack region */
   while (p < _estack && *p == STACK_PAINT) ++p;
   return (uint32_t)((uintptr_t)_estack - (uintptr_t)p);
 }

@@ -14,9 +14,9 @@
 namespace hmpc::hil {
 
 struct FaultConfig {
-  double drop_fraction = 0;        // share of frames lost, [0, 1]
-  double corrupt_fraction = 0;     // share of frames with one bit flipped, [0, 1]
-  double silence_start_s = -1;     // start of a window with no frames at all; < 0: none
+  double drop_fraction = 0;     // share of frames lost, [0, 1]
+  double corrupt_fraction = 0;  // share of frames with one bit flipped, [0, 1]
+  double silence_start_s = -1;  // start of a window with no frames at all; < 0: none
   double silence_duration_s = 0;
   std::uint64_t seed = 1;
 

@@ -1,6 +1,7 @@
 #include "simbody_forearm.hpp"
 
 #include <Simbody.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -99,9 +100,8 @@ class JointFriction : public SimTK::Force::Custom::Implementation {
 // body origin, the elbow, which lies at -com from the centre of mass.
 SimTK::Body::Rigid link(const Parameters& p) {
   const SimTK::Vec3 com(p.com_distance, 0, 0);
-  const SimTK::Inertia about_elbow =
-      SimTK::Inertia(p.mass * p.gyration_radius * p.gyration_radius)
-          .shiftFromMassCenter(-com, p.mass);
+  const SimTK::Inertia about_elbow = SimTK::Inertia(p.mass * p.gyration_radius * p.gyration_radius)
+                                         .shiftFromMassCenter(-com, p.mass);
   return SimTK::Body::Rigid(SimTK::MassProperties(p.mass, com, about_elbow));
 }
 
@@ -164,9 +164,13 @@ struct SimbodyForearm::Impl {
   // The motor driver in torque mode: tau_m = k_m v_m, set for each step.
   SimTK::Force::MobilityConstantForce motor{forces, elbow, SimTK::MobilizerUIndex(0), 0.0};
   // One element holds both stops.
-  SimTK::Force::MobilityLinearStop stops{forces, elbow, SimTK::MobilizerQIndex(0),
-                                         plant.stop_stiffness, plant.stop_dissipation,
-                                         plant.stop_lower, plant.stop_upper};
+  SimTK::Force::MobilityLinearStop stops{forces,
+                                         elbow,
+                                         SimTK::MobilizerQIndex(0),
+                                         plant.stop_stiffness,
+                                         plant.stop_dissipation,
+                                         plant.stop_lower,
+                                         plant.stop_upper};
   SimTK::RungeKuttaMersonIntegrator integrator{system};
 
   double v_p = 0, v_m = 0;
@@ -228,8 +232,6 @@ double SimbodyForearm::motor_torque() const { return impl_->plant.motor_gain * i
 double SimbodyForearm::applied_v_p() const { return impl_->v_p; }
 double SimbodyForearm::applied_v_m() const { return impl_->v_m; }
 std::uint64_t SimbodyForearm::rejected_commands() const { return impl_->rejected; }
-const forearm::Parameters<double>& SimbodyForearm::plant_parameters() const {
-  return impl_->plant;
-}
+const forearm::Parameters<double>& SimbodyForearm::plant_parameters() const { return impl_->plant; }
 
 }  // namespace hmpc::hil

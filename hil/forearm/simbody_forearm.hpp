@@ -48,11 +48,11 @@ class SimbodyForearm {
   void step(double v_p, double v_m);
 
   ForearmPlantState state() const;
-  double time() const;                  // s since construction
-  double pam_torque() const;            // N·m at the current state
-  double motor_torque() const;          // N·m applied during the last step
-  double applied_v_p() const;           // V, after clamping
-  double applied_v_m() const;           // V, after clamping
+  double time() const;          // s since construction
+  double pam_torque() const;    // N·m at the current state
+  double motor_torque() const;  // N·m applied during the last step
+  double applied_v_p() const;   // V, after clamping
+  double applied_v_m() const;   // V, after clamping
   std::uint64_t rejected_commands() const;
   const forearm::Parameters<double>& plant_parameters() const;  // model with the mismatch applied
 

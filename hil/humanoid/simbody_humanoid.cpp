@@ -1,7 +1,8 @@
 #include "simbody_humanoid.hpp"
 
-#include <Eigen/Geometry>
 #include <Simbody.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -77,20 +78,21 @@ struct BasicSimbodyHumanoid<ArmJoints>::Impl {
   SimTK::Force::DiscreteForces applied{forces, matter};
   SimTK::MobilizedBody::Free torso;
   std::array<SimTK::MobilizedBody, D::kBodies> body;  // ours -> Simbody's; none for the hip links
-  std::vector<SimTK::Force> soles;                 // the contact elements, ContactModel's order
+  std::vector<SimTK::Force> soles;                    // the contact elements, ContactModel's order
   std::vector<SimTK::MobilizedBodyIndex> sole_body;
   SimTK::State state;
   std::unique_ptr<SimTK::RungeKuttaMersonIntegrator> integrator;  // made by the first step()
   bool restart = true;  // the integrator must start from `state` (set_state() changed it)
   std::array<SimTK::MobilizedBody, kJoints> joint;  // the mobilizer of each of our joints
-  std::array<int, kJoints> joint_q{}, joint_u{};  // Simbody index of each of our joints
+  std::array<int, kJoints> joint_q{}, joint_u{};    // Simbody index of each of our joints
   int base_q = 0, base_u = 0;
-  MassMatrix to_simbody;                          // T: u = T v
-  Eigen::Matrix<double, kDofs, 1> udot_offset;    // d: udot = T a + d
+  MassMatrix to_simbody;                        // T: u = T v
+  Eigen::Matrix<double, kDofs, 1> udot_offset;  // d: udot = T a + d
 
   Impl(const Model& model, const ContactModel* contact)
       : gravity(forces, matter, vec3(require_rigid(model).gravity)),
-        torso(matter.Ground(), SimTK::Transform(), rigid_body(model.bodies[0]), SimTK::Transform()) {
+        torso(matter.Ground(), SimTK::Transform(), rigid_body(model.bodies[0]),
+              SimTK::Transform()) {
     for (int side = 0; side < 2; ++side) {
       const Body& hip = model.bodies[Model::body_of(side, kHipAbduction)];
       const Body& thigh = model.bodies[Model::body_of(side, kHipFlexion)];
@@ -188,7 +190,8 @@ struct BasicSimbodyHumanoid<ArmJoints>::Impl {
     to_simbody.template block<3, 3>(base_u, 0) = R;
     to_simbody.template block<3, 3>(base_u + 3, 3) = R;
     const Velocity v = to_simbody.transpose() * map(state.getU());
-    udot_offset.template segment<3>(base_u + 3) = R * v.template head<3>().cross(v.template segment<3>(3));
+    udot_offset.template segment<3>(base_u + 3) =
+        R * v.template head<3>().cross(v.template segment<3>(3));
   }
 
   Eigen::Map<const Eigen::Matrix<double, kDofs, 1>> map(const SimTK::Vector& x) const {
@@ -215,8 +218,7 @@ BasicSimbodyHumanoid<A>::~BasicSimbodyHumanoid() = default;
 template <int A>
 void BasicSimbodyHumanoid<A>::set_state(const Configuration& q, const Velocity& v) {
   Impl& s = *impl_;
-  const Eigen::Quaterniond orientation =
-      Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized();
+  const Eigen::Quaterniond orientation = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized();
   const Matrix3 R = orientation.toRotationMatrix();
   SimTK::Vector& sq = s.state.updQ();
   sq[s.base_q + 0] = orientation.w();
@@ -231,7 +233,8 @@ void BasicSimbodyHumanoid<A>::set_state(const Configuration& q, const Velocity& 
   const Eigen::Matrix<double, kDofs, 1> u = s.to_simbody * v;
   SimTK::Vector& su = s.state.updU();
   for (int k = 0; k < kDofs; ++k) su[k] = u[k];
-  s.udot_offset.template segment<3>(s.base_u + 3) = R * v.template head<3>().cross(v.template segment<3>(3));
+  s.udot_offset.template segment<3>(s.base_u + 3) =
+      R * v.template head<3>().cross(v.template segment<3>(3));
   s.restart = true;
 }
 

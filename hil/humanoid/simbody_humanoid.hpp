@@ -64,7 +64,8 @@ class BasicSimbodyHumanoid {
   using State = humanoid::BasicState<ArmJoints>;
 
   // `parameters` without armature: what the twin can mirror.
-  static humanoid::Parameters rigid_parameters(humanoid::Parameters parameters = humanoid::Parameters{});
+  static humanoid::Parameters rigid_parameters(
+      humanoid::Parameters parameters = humanoid::Parameters{});
 
   // Throws std::invalid_argument if the model has armature.
   explicit BasicSimbodyHumanoid(const Model& model = Model(rigid_parameters()));

@@ -40,9 +40,9 @@ using hmpc::host::ForearmCanMaster;
 using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
-using hmpc::platform::SocketCan;
 using hmpc::platform::describe;
 using hmpc::platform::monotonic_seconds;
+using hmpc::platform::SocketCan;
 
 constexpr const char* kProgram = "hmpc-forearm-host";
 constexpr double kDegree = M_PI / 180;
@@ -66,7 +66,8 @@ struct Options {
 };
 
 void print_usage(std::FILE* out) {
-  std::fprintf(out,
+  std::fprintf(
+      out,
       "usage: hmpc-forearm-host [--interface IFACE] [--node N] [--lockstep] [--duration S]\n"
       "         [--run STRATEGY [--amplitude-deg A] [--frequency HZ] [--offset-deg D]\n"
       "          [--run-at S] [--run-for S]] [--dds-domain ID [--dds-loopback]]\n"
@@ -74,7 +75,8 @@ void print_usage(std::FILE* out) {
       "         [--stop-heartbeat-at S] [--seed N] [--log FILE]\n"
       "  --interface IFACE     SocketCAN interface (default vcan0)\n"
       "  --node N              board node id 0..15 (default 0)\n"
-      "  --lockstep            one host tick per Sync frame of the HIL plant (default: 1 kHz timer)\n"
+      "  --lockstep            one host tick per Sync frame of the HIL plant (default: 1 kHz "
+      "timer)\n"
       "  --duration S          stop after S s of host time (default: until SIGINT/SIGTERM)\n"
       "  --run STRATEGY        scripted session: idle, hold at %.2f s, run STRATEGY from --run-at\n"
       "                        for --run-for s, then hold; STRATEGY: fine_4ms fine_8ms\n"
@@ -98,7 +100,8 @@ void print_usage(std::FILE* out) {
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
   hmpc::cli::OptionParser p;
   p.text("--interface", [&](const std::string& v) -> std::string {
-    if (v.empty() || v.size() >= 16) return hmpc::cli::bad_value("--interface", "a name of 1..15 characters", v);
+    if (v.empty() || v.size() >= 16)
+      return hmpc::cli::bad_value("--interface", "a name of 1..15 characters", v);
     o.interface = v;
     return {};
   });
@@ -108,8 +111,10 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.text("--run", [&](const std::string& v) -> std::string {
     std::uint32_t value = 0;
     if (!proto::value_of(proto::kStrategyValues, v, value))
-      return hmpc::cli::bad_value("--run", "one of fine_4ms fine_8ms coarse_20ms coarse_40ms "
-                                           "two_stage pam_only", v);
+      return hmpc::cli::bad_value("--run",
+                                  "one of fine_4ms fine_8ms coarse_20ms coarse_40ms "
+                                  "two_stage pam_only",
+                                  v);
     o.strategy = proto::Strategy(value);
     o.scripted = true;
     return {};
@@ -273,11 +278,11 @@ class Host {
         proto::value_name(proto::kStrategyValues, std::uint32_t(r.status.strategy)),
         unsigned(r.status.rejected_frames), unsigned(r.status.watchdog_trips),
         unsigned(r.status.solver_failures), unsigned(r.status.overruns),
-        static_cast<unsigned long long>(r.telemetry_frames), static_cast<unsigned long long>(solve_times_.size()), solve_times_.max(),
+        static_cast<unsigned long long>(r.telemetry_frames),
+        static_cast<unsigned long long>(solve_times_.size()), solve_times_.max(),
         solve_times_.median(), master_.rejects().total(),
         static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
-        static_cast<unsigned long long>(f.silenced),
-        static_cast<unsigned long long>(dds_commands_),
+        static_cast<unsigned long long>(f.silenced), static_cast<unsigned long long>(dds_commands_),
         static_cast<unsigned long long>(dds_ ? dds_->rejected_commands() : 0),
         heartbeat_max_gap_s_ * 1e3, last_heartbeat_s_);
   }
@@ -326,7 +331,8 @@ class Host {
   // heartbeats while the host asked for hold or run, the modes in which the board's heartbeat
   // watchdog runs: the board must fault exactly when that interval exceeds its timeout.
   void on_intact_heartbeat(const proto::ModeCommand& m, double t) {
-    const bool active = m.mode == proto::RequestedMode::kHold || m.mode == proto::RequestedMode::kRun;
+    const bool active =
+        m.mode == proto::RequestedMode::kHold || m.mode == proto::RequestedMode::kRun;
     if (active && last_active_heartbeat_s_ >= 0) {
       heartbeat_max_gap_s_ = std::max(heartbeat_max_gap_s_, t - last_active_heartbeat_s_);
     }
@@ -344,10 +350,10 @@ class Host {
       std::fprintf(log_, "%.3f,%s,%s,%u,%.5f,%.5f,%.4f,%.4f,%.4f,%.4f,%u,%u,%u,%u\n", now_s_,
                    proto::value_name(proto::kBoardModeValues, std::uint32_t(r.status.mode)),
                    proto::value_name(proto::kStrategyValues, std::uint32_t(r.status.strategy)),
-                   unsigned(r.status.faults), r.joint.theta, theta_d, r.outputs.v_p,
-                   r.outputs.v_m, r.outputs.tau_p, r.outputs.tau_m,
-                   unsigned(r.telemetry.status), unsigned(r.telemetry.coarse_iterations),
-                   unsigned(r.telemetry.fine_iterations), unsigned(r.telemetry.solve_time_us));
+                   unsigned(r.status.faults), r.joint.theta, theta_d, r.outputs.v_p, r.outputs.v_m,
+                   r.outputs.tau_p, r.outputs.tau_m, unsigned(r.telemetry.status),
+                   unsigned(r.telemetry.coarse_iterations), unsigned(r.telemetry.fine_iterations),
+                   unsigned(r.telemetry.solve_time_us));
     }
     if (dds_) {
       hmpc::dds::ForearmStateSample s;
@@ -410,7 +416,9 @@ End run(const Options& o, SocketCan& can, Host& host, int signal_fd, std::string
   pollfd fds[3] = {{can.native_handle(), POLLIN, 0}, {signal_fd, POLLIN, 0}, {timer, POLLIN, 0}};
   std::uint64_t ticks = 0;
   End end = End::kDone;
-  const auto due = [&](std::uint64_t tick) { return o.duration_s <= 0 || tick * 1e-3 < o.duration_s; };
+  const auto due = [&](std::uint64_t tick) {
+    return o.duration_s <= 0 || tick * 1e-3 < o.duration_s;
+  };
   while (due(ticks)) {
     if (::poll(fds, timer >= 0 ? 3 : 2, -1) < 0) {
       if (errno == EINTR) continue;

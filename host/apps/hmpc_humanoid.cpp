@@ -17,24 +17,26 @@ using namespace hmpc::humanoid;
 constexpr int kFellStatus = 3;
 
 void usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: hmpc-humanoid --motion NAME|FILE [options]\n"
-               "  --motion NAME|FILE  a motion file, or the name of one shipped in\n"
-               "                      " HMPC_HUMANOID_MOTIONS " (e.g. I-standing, V-low-jump,\n"
-               "                      reaching)\n"
-               "  --mpc KIND          fine, coarse or coarse-fast (default: coarse-fast)\n"
-               "  --duration S        simulated seconds, 0.03..60 (default: the motion file's)\n"
-               "  --threads T         linearisation threads, 1..64 (default: 2)\n"
-               "  --frames N          stick figures in filmstrip.png, 2..16 (default: 8)\n"
-               "  --out DIR           where to write trajectory.csv and the pictures\n"
-               "                      (default: humanoid-MOTION-KIND)\n"
-               "  --no-warm-start     skip the offline optimisation of the initial inputs\n"
-               "  --no-truncate       let a solve run past the 30 ms sampling time\n"
-               "  --initial-velocity VX,VY,VZ  the whole robot moving at the start [m/s], world,\n"
-               "                      at most 1 m/s (default: at rest)\n"
-               "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
-               "ground), 2 bad arguments or motion file, 1 the log or pictures could not be written\n",
-               kFellStatus);
+  std::fprintf(
+      out,
+      "usage: hmpc-humanoid --motion NAME|FILE [options]\n"
+      "  --motion NAME|FILE  a motion file, or the name of one shipped in\n"
+      "                      " HMPC_HUMANOID_MOTIONS
+      " (e.g. I-standing, V-low-jump,\n"
+      "                      reaching)\n"
+      "  --mpc KIND          fine, coarse or coarse-fast (default: coarse-fast)\n"
+      "  --duration S        simulated seconds, 0.03..60 (default: the motion file's)\n"
+      "  --threads T         linearisation threads, 1..64 (default: 2)\n"
+      "  --frames N          stick figures in filmstrip.png, 2..16 (default: 8)\n"
+      "  --out DIR           where to write trajectory.csv and the pictures\n"
+      "                      (default: humanoid-MOTION-KIND)\n"
+      "  --no-warm-start     skip the offline optimisation of the initial inputs\n"
+      "  --no-truncate       let a solve run past the 30 ms sampling time\n"
+      "  --initial-velocity VX,VY,VZ  the whole robot moving at the start [m/s], world,\n"
+      "                      at most 1 m/s (default: at rest)\n"
+      "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
+      "ground), 2 bad arguments or motion file, 1 the log or pictures could not be written\n",
+      kFellStatus);
 }
 
 // The run on the biped (A = 0) or, for a reaching motion, the robot with an arm (A = 1).
@@ -46,17 +48,19 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
   const BasicClosedLoopSample<A>& last = run.samples.back();
   std::printf("motion %s, %s MPC%s, %.2f s simulated\n", stem.c_str(), name_of(config.mpc),
               config.warm_start ? "" : " (no warm start)", last.time);
-  std::printf("base point height %.3f..%.3f m, final %.3f m; final velocity (%.2f, %.2f, %.2f) m/s\n",
-              s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
-              last.base.velocity.y(), last.base.velocity.z());
-  std::printf("solve per 30 ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
-              "truncated %d, over 30 ms %d, unusable %d of %zu\n",
-              s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.overruns, s.unusable,
-              run.samples.size());
+  std::printf(
+      "base point height %.3f..%.3f m, final %.3f m; final velocity (%.2f, %.2f, %.2f) m/s\n",
+      s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
+      last.base.velocity.y(), last.base.velocity.z());
+  std::printf(
+      "solve per 30 ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
+      "truncated %d, over 30 ms %d, unusable %d of %zu\n",
+      s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.overruns, s.unusable,
+      run.samples.size());
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
   if (run.fell()) {
-    std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n", run.fell_at,
-                config.fallen_clearance);
+    std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n",
+                run.fell_at, config.fallen_clearance);
   }
 
   if constexpr (A == 1) {
@@ -93,8 +97,9 @@ int main(int argc, char** argv) {
     return v.empty() ? std::string("--motion needs a name or file") : std::string();
   });
   parser.text("--mpc", [&](const std::string& v) {
-    return parse_mpc_kind(v, config.mpc) ? std::string()
-                                         : hmpc::cli::bad_value("--mpc", "fine, coarse or coarse-fast", v);
+    return parse_mpc_kind(v, config.mpc)
+               ? std::string()
+               : hmpc::cli::bad_value("--mpc", "fine, coarse or coarse-fast", v);
   });
   parser.number("--duration", 0.03, 60.0, "seconds in 0.03..60", config.duration);
   parser.integer("--threads", 1, 64, config.threads);
@@ -115,8 +120,9 @@ int main(int argc, char** argv) {
       config.initial_velocity[i] = value;
     }
     const bool extra = static_cast<bool>(std::getline(in, part));
-    return extra || config.initial_velocity.norm() > 1.0 ? hmpc::cli::bad_value("--initial-velocity", what, v)
-                                                         : std::string();
+    return extra || config.initial_velocity.norm() > 1.0
+               ? hmpc::cli::bad_value("--initial-velocity", what, v)
+               : std::string();
   });
   parser.flag("--no-warm-start", no_warm_start);
   parser.flag("--no-truncate", no_truncate);
@@ -139,7 +145,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "hmpc-humanoid: %s\n", e.what());
     return 2;
   }
-  const std::string stem = std::filesystem::path(motion_path(motion_name, HMPC_HUMANOID_MOTIONS)).stem().string();
+  const std::string stem =
+      std::filesystem::path(motion_path(motion_name, HMPC_HUMANOID_MOTIONS)).stem().string();
   if (out.empty()) out = "humanoid-" + stem + "-" + name_of(config.mpc);
 
   return motion.reach.active ? run_and_report<1>(motion, config, stem, out, frames)

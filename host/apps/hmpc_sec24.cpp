@@ -79,13 +79,21 @@ bool plot(const std::filesystem::path& dir, const std::filesystem::path& csv) {
         "methods = 'fine coarse slow-fast coarse-fast'\n"
         "titles = 'Fine Coarse Slow-Fast Coarse-Fast'\n"
         "sel(m, col) = (strcol(1) eq m) ? column(col) : NaN\n"
-        "set output '" << (dir / "sec24_slow_state_y.png").string() << "'\n"
+        "set output '"
+     << (dir / "sec24_slow_state_y.png").string()
+     << "'\n"
         "set title 'Slow state y (cf. thesis Fig. 2.3), y_d = 1.0'\nset ylabel 'y'\n"
-        "plot for [i=1:4] '" << csv.string() << "' every ::1 using 2:(sel(word(methods,i),3)) "
+        "plot for [i=1:4] '"
+     << csv.string()
+     << "' every ::1 using 2:(sel(word(methods,i),3)) "
         "with lines lw 2 title word(titles,i), 1.0 with lines dt 2 lc 'black' title 'y_d'\n"
-        "set output '" << (dir / "sec24_fast_state_z.png").string() << "'\n"
+        "set output '"
+     << (dir / "sec24_fast_state_z.png").string()
+     << "'\n"
         "set title 'Fast state z (cf. thesis Fig. 2.4), z_d = 2.0'\nset ylabel 'z'\n"
-        "plot for [i=1:4] '" << csv.string() << "' every ::1 using 2:(sel(word(methods,i),4)) "
+        "plot for [i=1:4] '"
+     << csv.string()
+     << "' every ::1 using 2:(sel(word(methods,i),4)) "
         "with lines lw 2 title word(titles,i), 2.0 with lines dt 2 lc 'black' title 'z_d'\n";
   gp.close();
   const std::string command = "gnuplot '" + script.string() + "'";
@@ -105,14 +113,15 @@ int main(int argc, char** argv) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
-    std::fprintf(stderr, "hmpc-sec24: cannot create '%s': %s\n", dir.c_str(),
-                 ec.message().c_str());
+    std::fprintf(stderr, "hmpc-sec24: cannot create '%s': %s\n", dir.c_str(), ec.message().c_str());
     return 1;
   }
 
   std::vector<RunResult> first_runs;
-  std::printf("Thesis Sec. 2.4, Eq. 2.37 (eps = 0.1), x0 = (0, 0), x_d = (1, 2), 0.4 s at 1 ms,"
-              " iLQR cap 50, tol 1e-6; %d trial(s) per method\n\n", options.trials);
+  std::printf(
+      "Thesis Sec. 2.4, Eq. 2.37 (eps = 0.1), x0 = (0, 0), x_d = (1, 2), 0.4 s at 1 ms,"
+      " iLQR cap 50, tol 1e-6; %d trial(s) per method\n\n",
+      options.trials);
   std::printf("%-12s %8s %8s %12s %14s %14s %10s %9s\n", "method", "final y", "final z",
               "accum. cost", "max solve ms", "median ms", "mean iter", "unusable");
   for (Method method : kAllMethods) {
@@ -133,14 +142,16 @@ int main(int argc, char** argv) {
                 first.unusable_solves);
     first_runs.push_back(std::move(first));
   }
-  std::printf("\nsampling time 1.000 ms: a method is real-time when its max solve is below it"
-              " (absolute times depend on this machine; compare the ratios)\n");
+  std::printf(
+      "\nsampling time 1.000 ms: a method is real-time when its max solve is below it"
+      " (absolute times depend on this machine; compare the ratios)\n");
 
   const auto csv = dir / "sec24_trajectories.csv";
   write_trajectories_csv(first_runs, csv.string());
   std::printf("wrote %s\n", csv.c_str());
   if (!plot(dir, csv)) {
-    std::fprintf(stderr, "hmpc-sec24: gnuplot failed; install it with toolchains/setup-debian.sh\n");
+    std::fprintf(stderr,
+                 "hmpc-sec24: gnuplot failed; install it with toolchains/setup-debian.sh\n");
     return 1;
   }
   std::printf("wrote %s and %s\n", (dir / "sec24_slow_state_y.png").c_str(),

@@ -68,7 +68,7 @@ double percentile(std::vector<double> v, double q) {
 
 }  // namespace
 
-#define HMPC_FOREARM_BENCH(name, type, factory, strategy)                          \
+#define HMPC_FOREARM_BENCH(name, type, factory, strategy)                            \
   static void name(benchmark::State& s) { track<S::type>(s, strategy, S::factory); } \
   BENCHMARK(name)->Iterations(3)->Unit(benchmark::kMillisecond)
 HMPC_FOREARM_BENCH(BM_Fine4ms, Fine4, fine4, Strategy::kFine4);
@@ -86,8 +86,8 @@ int main(int argc, char** argv) {
   if (rows().count(Strategy::kTwoStage) == 0 || rows().count(Strategy::kFine4) == 0) return 0;
 
   std::printf("\nForearm, 1 Hz +-30 deg, 10 s, 4 ms control period (every update of 3 runs)\n");
-  std::printf("%-12s %12s %12s %14s %14s %10s %10s\n", "strategy", "host max ms",
-              "host med ms", "M7 max instr", "M7 med instr", "cost", "rms rad");
+  std::printf("%-12s %12s %12s %14s %14s %10s %10s\n", "strategy", "host max ms", "host med ms",
+              "M7 max instr", "M7 med instr", "cost", "rms rad");
   for (const auto& [strategy, r] : rows())
     std::printf("%-12s %12.3f %12.4f %14.0f %14.0f %10.1f %10.4f\n", to_string(strategy),
                 percentile(r.host_ms, 1.0), percentile(r.host_ms, 0.5),

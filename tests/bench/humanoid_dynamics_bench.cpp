@@ -81,7 +81,8 @@ void ours_crba(benchmark::State& state) {
 }
 void ours_forward(benchmark::State& state) {
   Dynamics d{rigid_model()};
-  run(state, [&](const Sample& s) { benchmark::DoNotOptimize(d.forward_dynamics(s.q, s.v, s.tau)); });
+  run(state,
+      [&](const Sample& s) { benchmark::DoNotOptimize(d.forward_dynamics(s.q, s.v, s.tau)); });
 }
 void simbody_bias(benchmark::State& state) {
   hmpc::hil::SimbodyHumanoid sim;
@@ -158,7 +159,8 @@ double jacobian_disagreement() {
   SimbodyForward simbody;
   double worst = 0.0;
   for (const Sample& s : samples()) {
-    const ForwardJacobian a = forward_jacobian(s, std::ref(ours)), b = forward_jacobian(s, std::ref(simbody));
+    const ForwardJacobian a = forward_jacobian(s, std::ref(ours)),
+                          b = forward_jacobian(s, std::ref(simbody));
     worst = std::max(worst, (a - b).cwiseAbs().maxCoeff() / a.cwiseAbs().maxCoeff());
   }
   return worst;
@@ -199,9 +201,10 @@ int main(int argc, char** argv) {
     const double ours = recorder.ns[row[1]], simbody = recorder.ns[row[2]];
     std::printf("%-18s %12.3f %12.3f %13.2fx\n", row[0], ours / 1e3, simbody / 1e3, simbody / ours);
   }
-  std::printf("derivatives: d(qddot)/d(q, v, tau) by forward differences, 38 forward dynamics; the two "
-              "Jacobians differ by at most %.1e of their largest entry (finite-difference noise)\n",
-              jacobian_disagreement());
+  std::printf(
+      "derivatives: d(qddot)/d(q, v, tau) by forward differences, 38 forward dynamics; the two "
+      "Jacobians differ by at most %.1e of their largest entry (finite-difference noise)\n",
+      jacobian_disagreement());
   benchmark::Shutdown();
   return 0;
 }

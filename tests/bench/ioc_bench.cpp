@@ -38,7 +38,9 @@ void usage(std::FILE* out) {
                "  without options: the robot's own Coarse MPC plans on V-low-jump and squatting\n");
 }
 
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 // Mean seconds per call of `f`, over at least 0.5 s and 3 calls.
 template <typename F>
@@ -53,7 +55,8 @@ double seconds_per_call(F&& f) {
 }
 
 Task own_plans(const std::string& name) {
-  Task task{name, humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion"), {}};
+  Task task{
+      name, humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion"), {}};
   humanoid::ClosedLoopConfig config;
   config.mpc = humanoid::MpcKind::kCoarse;
   config.truncate = false;
@@ -80,7 +83,8 @@ Weights difference_gradient(const LocalIoc& ioc, const Weights& w) {
 
 void measure(const Task& task) {
   const Weights w = initial_weights();
-  double linearise[2], evaluate[2], value_only = 0.0, differences = 0.0, learn_seconds[2], gradient_difference = 0.0;
+  double linearise[2], evaluate[2], value_only = 0.0, differences = 0.0, learn_seconds[2],
+                                    gradient_difference = 0.0;
   LearnResult learned[2];
   int windows = 0;
   for (int threads = 1; threads <= 2; ++threads) {
@@ -95,7 +99,8 @@ void measure(const Task& task) {
       value_only = seconds_per_call([&] { ioc.log_likelihood(w); });
       Weights by_differences;
       differences = seconds_per_call([&] { by_differences = difference_gradient(ioc, w); });
-      gradient_difference = (by_differences - gradient).cwiseAbs().maxCoeff() / gradient.cwiseAbs().maxCoeff();
+      gradient_difference =
+          (by_differences - gradient).cwiseAbs().maxCoeff() / gradient.cwiseAbs().maxCoeff();
     }
     start = Clock::now();
     learned[threads - 1] = learn_weights(ioc, LearnConfig{});
@@ -104,23 +109,30 @@ void measure(const Task& task) {
   std::printf("\n%s: %zu demonstrations, %d windows of N = %d coarse steps\n", task.name.c_str(),
               task.demonstrations.size(), windows, kWindowSteps);
   std::printf("                                        1 thread    2 threads   speed-up\n");
-  std::printf("  linearising the windows             %9.3f s  %9.3f s  %8.2fx\n", linearise[0], linearise[1],
-              linearise[0] / linearise[1]);
-  std::printf("  log p and its gradient              %9.2f ms %9.2f ms %8.2fx\n", evaluate[0] * 1e3, evaluate[1] * 1e3,
-              evaluate[0] / evaluate[1]);
-  std::printf("  learning (L-BFGS)                   %9.2f s  %9.2f s  %8.2fx\n", learn_seconds[0], learn_seconds[1],
-              learn_seconds[0] / learn_seconds[1]);
-  std::printf("  learning: %d iterations, %d evaluations (%s) on 1 thread; %d, %d (%s) on 2; log p %.6e / %.6e; "
-              "cosine similarity to the motion file's weights %.4f\n",
-              learned[0].iterations, learned[0].evaluations, learned[0].stop.c_str(), learned[1].iterations,
-              learned[1].evaluations, learned[1].stop.c_str(), learned[0].log_likelihood, learned[1].log_likelihood,
-              cosine_similarity(learned[1].weights, weights_of(task.motion.weights)));
-  std::printf("  2 threads: value alone %.2f ms; gradient by the forward pass %.2f ms, by central differences "
-              "(26 values) %.2f ms: %.1fx; largest difference between them %.1e of the gradient\n",
-              value_only * 1e3, evaluate[1] * 1e3, differences * 1e3, differences / evaluate[1], gradient_difference);
-  std::printf("%s: learning from %d windows in %.2f s on 2 threads (1 thread: %.2f s), speed-up %.2fx\n",
-              task.name.c_str(), windows, learn_seconds[1] + linearise[1], learn_seconds[0] + linearise[0],
-              (learn_seconds[0] + linearise[0]) / (learn_seconds[1] + linearise[1]));
+  std::printf("  linearising the windows             %9.3f s  %9.3f s  %8.2fx\n", linearise[0],
+              linearise[1], linearise[0] / linearise[1]);
+  std::printf("  log p and its gradient              %9.2f ms %9.2f ms %8.2fx\n", evaluate[0] * 1e3,
+              evaluate[1] * 1e3, evaluate[0] / evaluate[1]);
+  std::printf("  learning (L-BFGS)                   %9.2f s  %9.2f s  %8.2fx\n", learn_seconds[0],
+              learn_seconds[1], learn_seconds[0] / learn_seconds[1]);
+  std::printf(
+      "  learning: %d iterations, %d evaluations (%s) on 1 thread; %d, %d (%s) on 2; log p %.6e / "
+      "%.6e; "
+      "cosine similarity to the motion file's weights %.4f\n",
+      learned[0].iterations, learned[0].evaluations, learned[0].stop.c_str(), learned[1].iterations,
+      learned[1].evaluations, learned[1].stop.c_str(), learned[0].log_likelihood,
+      learned[1].log_likelihood,
+      cosine_similarity(learned[1].weights, weights_of(task.motion.weights)));
+  std::printf(
+      "  2 threads: value alone %.2f ms; gradient by the forward pass %.2f ms, by central "
+      "differences "
+      "(26 values) %.2f ms: %.1fx; largest difference between them %.1e of the gradient\n",
+      value_only * 1e3, evaluate[1] * 1e3, differences * 1e3, differences / evaluate[1],
+      gradient_difference);
+  std::printf(
+      "%s: learning from %d windows in %.2f s on 2 threads (1 thread: %.2f s), speed-up %.2fx\n",
+      task.name.c_str(), windows, learn_seconds[1] + linearise[1], learn_seconds[0] + linearise[0],
+      (learn_seconds[0] + linearise[0]) / (learn_seconds[1] + linearise[1]));
 }
 
 }  // namespace
@@ -142,7 +154,8 @@ int main(int argc, char** argv) {
     error = "--demos and --reference go together";
   }
   if (outcome != cli::ParseOutcome::kRun || !error.empty()) {
-    return cli::exit_status(error.empty() ? outcome : cli::ParseOutcome::kError, "ioc_bench", error, usage);
+    return cli::exit_status(error.empty() ? outcome : cli::ParseOutcome::kError, "ioc_bench", error,
+                            usage);
   }
   try {
     std::vector<Task> tasks;

@@ -52,9 +52,15 @@ double mean(const std::vector<double>& v) {
 }  // namespace
 
 BENCHMARK_CAPTURE(BM_ClosedLoop, fine, Method::kFine)->Iterations(5)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ClosedLoop, coarse, Method::kCoarse)->Iterations(5)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ClosedLoop, slow_fast, Method::kSlowFast)->Iterations(5)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ClosedLoop, coarse_fast, Method::kCoarseFast)->Iterations(5)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_ClosedLoop, coarse, Method::kCoarse)
+    ->Iterations(5)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_ClosedLoop, slow_fast, Method::kSlowFast)
+    ->Iterations(5)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_ClosedLoop, coarse_fast, Method::kCoarseFast)
+    ->Iterations(5)
+    ->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);

@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "hmpc/platform/linux/protocol_frames.hpp"
 #include "hmpc/models/forearm.hpp"
+#include "hmpc/platform/linux/protocol_frames.hpp"
 #include "hmpc/platform/linux/socketcan.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
@@ -31,12 +31,12 @@ extern char** environ;
 namespace {
 
 namespace proto = hmpc::forearm_protocol;
-using hmpc::platform::to_can_frame;
-using hmpc::platform::to_protocol_frame;
 using hmpc::platform::CanFilter;
 using hmpc::platform::CanFrame;
 using hmpc::platform::CanStatus;
 using hmpc::platform::SocketCan;
+using hmpc::platform::to_can_frame;
+using hmpc::platform::to_protocol_frame;
 using proto::BoardMode;
 using proto::RequestedMode;
 using proto::Strategy;
@@ -160,9 +160,9 @@ class BusRig {
       return false;
     }
     // This node's frames only.
-    const CanFilter node{proto::frame_id(proto::FrameType::kModeCommand, kNode),
-                         0x7F0u | hmpc::platform::kCanExtendedId |
-                             hmpc::platform::kCanRemoteRequest};
+    const CanFilter node{
+        proto::frame_id(proto::FrameType::kModeCommand, kNode),
+        0x7F0u | hmpc::platform::kCanExtendedId | hmpc::platform::kCanRemoteRequest};
     return bus_.set_filters(&node, 1).ok();
   }
 
@@ -200,16 +200,15 @@ class BusRig {
     if (heartbeat == Heartbeat::kOn && steps_ % kHeartbeatPeriodTicks == 0) send_heartbeat();
     while (streaming_ && next_sample_us_ <= now_us() + 300000) {
       const double t = 1e-6 * double(next_sample_us_ - stream_start_us_);
-      send(encode(host_, proto::TrajectorySample{
-                             float(30 * M_PI / 180 * std::sin(2 * M_PI * 0.5 * t)),
-                             next_sample_us_, 0}));
+      send(encode(host_,
+                  proto::TrajectorySample{float(30 * M_PI / 180 * std::sin(2 * M_PI * 0.5 * t)),
+                                          next_sample_us_, 0}));
       next_sample_us_ += 4000;
     }
     send(encode(plant_, proto::SensorSample{float(x_(0)), float(x_(1)), float(x_(2) / 10), 0}));
     send(encode(plant_, proto::Sync{std::uint32_t(steps_), 0}));
     ASSERT_TRUE(await_actuator_command()) << "no ActuatorCommand for Sync " << steps_;
-    x_ = hmpc::forearm::integrate(params_, x_, Eigen::Vector2d(command_.v_m, command_.v_p),
-                                  1e-3);
+    x_ = hmpc::forearm::integrate(params_, x_, Eigen::Vector2d(command_.v_m, command_.v_p), 1e-3);
     ++steps_;
   }
   void run(int ticks, Heartbeat heartbeat = Heartbeat::kOn) {
@@ -281,8 +280,8 @@ class ForearmBoardOnVcan : public ::testing::Test {
     std::string error;
     ASSERT_TRUE(rig_.open(error)) << error;
     ASSERT_TRUE(board_.start({"--interface", kBus, "--node", std::to_string(kNode), "--lockstep"}));
-    ASSERT_TRUE(board_.wait_for_output("ready", kStartTimeout))
-        << "the board did not start:\n" << board_.output();
+    ASSERT_TRUE(board_.wait_for_output("ready", kStartTimeout)) << "the board did not start:\n"
+                                                                << board_.output();
     rig_.send_gains(kHoldGains);
   }
 
@@ -420,8 +419,8 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
   std::string error;
   ASSERT_TRUE(rig.open(error)) << error;
   BoardProcess board;
-  ASSERT_TRUE(board.start({"--interface", kBus, "--node", std::to_string(kNode), "--duration",
-                           "3"}));
+  ASSERT_TRUE(
+      board.start({"--interface", kBus, "--node", std::to_string(kNode), "--duration", "3"}));
   ASSERT_TRUE(board.wait_for_output("ready", kStartTimeout)) << board.output();
   rig.send_gains(kHoldGains);
 
@@ -443,15 +442,16 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
     proto::Frame f;
     const double now_s = seconds_since(start);
     if (k % kHeartbeatPeriodTicks == 0) {
-      const RequestedMode mode =
-          k < 100 ? RequestedMode::kIdle : k < 500 ? RequestedMode::kHold : RequestedMode::kRun;
-      rig.send(rig.encode(host, proto::ModeCommand{mode, Strategy::kTwoStage, false,
-                                                   std::uint32_t(k * 1000), 0}));
-      if (last_heartbeat_s >= 0) max_heartbeat_gap_s = std::max(max_heartbeat_gap_s, now_s - last_heartbeat_s);
+      const RequestedMode mode = k < 100   ? RequestedMode::kIdle
+                                 : k < 500 ? RequestedMode::kHold
+                                           : RequestedMode::kRun;
+      rig.send(rig.encode(
+          host, proto::ModeCommand{mode, Strategy::kTwoStage, false, std::uint32_t(k * 1000), 0}));
+      if (last_heartbeat_s >= 0)
+        max_heartbeat_gap_s = std::max(max_heartbeat_gap_s, now_s - last_heartbeat_s);
       last_heartbeat_s = now_s;
     }
-    rig.send(rig.encode(plant, proto::SensorSample{float(x(0)), float(x(1)),
-                                                   float(x(2) / 10), 0}));
+    rig.send(rig.encode(plant, proto::SensorSample{float(x(0)), float(x(1)), float(x(2) / 10), 0}));
     if (last_sensor_s >= 0) max_sensor_gap_s = std::max(max_sensor_gap_s, now_s - last_sensor_s);
     last_sensor_s = now_s;
     // Whatever the board said since: latest command and status.
@@ -462,8 +462,8 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
       proto::NodeId node;
       if (!to_protocol_frame(raw, f) || !proto::identify(f.id, type, node)) continue;
       if (type == proto::FrameType::kActuatorCommand) from_board.decode(f, applied);
-      if (type == proto::FrameType::kBoardStatus && from_board.decode(f, status) ==
-                                                        proto::DecodeResult::kOk) {
+      if (type == proto::FrameType::kBoardStatus &&
+          from_board.decode(f, status) == proto::DecodeResult::kOk) {
         saw_run = saw_run || status.mode == BoardMode::kRun;
         fault_bits |= status.faults;
       }
@@ -482,10 +482,10 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
   }
   EXPECT_EQ(board.stop(0, kStartTimeout), 0) << board.output();
-  std::printf("real time, 3 s: %s\n  (this test's own 1 kHz sender was late %d times of 2800; "
-              "longest gaps: sensor %.1f ms, heartbeat %.1f ms)\n",
-              board.output().c_str(), missed_sends, max_sensor_gap_s * 1e3,
-              max_heartbeat_gap_s * 1e3);
+  std::printf(
+      "real time, 3 s: %s\n  (this test's own 1 kHz sender was late %d times of 2800; "
+      "longest gaps: sensor %.1f ms, heartbeat %.1f ms)\n",
+      board.output().c_str(), missed_sends, max_sensor_gap_s * 1e3, max_heartbeat_gap_s * 1e3);
   EXPECT_EQ(board.summary("ticks"), 3000) << "one tick per 1 ms expiration, caught up or not";
   EXPECT_EQ(board.summary("heap_allocations_in_loop"), 0);
   EXPECT_EQ(board.summary("safe_outputs_sent"), 1);
@@ -517,7 +517,8 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
     EXPECT_TRUE(saw_run) << "the board did not reach run though the bus kept its pace";
     EXPECT_EQ(fault_bits, 0u);
   }
-  EXPECT_EQ(fault_bits & ~unsigned(proto::fault::kSensorTimeout | proto::fault::kHeartbeatTimeout), 0u)
+  EXPECT_EQ(fault_bits & ~unsigned(proto::fault::kSensorTimeout | proto::fault::kHeartbeatTimeout),
+            0u)
       << "a fault other than a watchdog's";
 }
 

@@ -3,8 +3,6 @@
 // and round-trip latency through the kernel's CAN stack.
 #include "hmpc/platform/linux/socketcan.hpp"
 
-#include "hmpc/platform/linux/heap_monitor.hpp"
-
 #include <fcntl.h>
 #include <gtest/gtest.h>
 
@@ -20,6 +18,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "hmpc/platform/linux/heap_monitor.hpp"
 
 namespace {
 
@@ -37,13 +37,15 @@ constexpr std::chrono::microseconds kArrival = 2s;
 
 std::string describe(const CanResult& result) {
   std::string text = hmpc::platform::to_string(result.status);
-  if (result.error_number != 0) text += std::string(" (") + std::strerror(result.error_number) + ")";
+  if (result.error_number != 0)
+    text += std::string(" (") + std::strerror(result.error_number) + ")";
   return text;
 }
 
 CanFrame make_frame(std::uint32_t id, std::uint8_t dlc, std::uint8_t seed) {
   CanFrame frame{id, dlc, {}};
-  for (std::uint8_t i = 0; i < dlc; ++i) frame.data[i] = static_cast<std::uint8_t>(seed * 31 + i * 7 + 1);
+  for (std::uint8_t i = 0; i < dlc; ++i)
+    frame.data[i] = static_cast<std::uint8_t>(seed * 31 + i * 7 + 1);
   return frame;
 }
 
@@ -62,8 +64,12 @@ class SocketCanOnVcan : public ::testing::Test {
 };
 
 TEST_F(SocketCanOnVcan, FramesRoundTripWithIdsLengthsAndPayloads) {
-  const std::uint32_t ids[] = {0x000, 0x123, 0x7FF, kCanExtendedId | 0x000,
-                               kCanExtendedId | 0x123, kCanExtendedId | 0x1ABCDEF,
+  const std::uint32_t ids[] = {0x000,
+                               0x123,
+                               0x7FF,
+                               kCanExtendedId | 0x000,
+                               kCanExtendedId | 0x123,
+                               kCanExtendedId | 0x1ABCDEF,
                                kCanExtendedId | 0x1FFFFFFF};
   std::uint8_t seed = 0;
   for (const std::uint32_t id : ids) {
@@ -221,7 +227,8 @@ TEST_F(SocketCanOnVcan, PrintsThroughput) {
       ASSERT_EQ(sequence, i);
     }
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double frames_per_second = kFrames / seconds;
   std::printf("[ figures  ] %s throughput: %.0f frames/s (%d 8-byte frames, bursts of %d)\n", kBus,
               frames_per_second, kFrames, kWindow);
@@ -262,7 +269,8 @@ TEST_F(SocketCanOnVcan, PrintsRoundTripLatency) {
     CanFrame reply{};
     if (!sender_.receive(reply, kArrival).ok()) break;
     round_trip_us.push_back(
-        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - sent_at).count());
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - sent_at)
+            .count());
     int sequence = -1;
     std::memcpy(&sequence, reply.data, sizeof sequence);
     if (reply.id != kPongId || sequence != i) break;
@@ -271,10 +279,11 @@ TEST_F(SocketCanOnVcan, PrintsRoundTripLatency) {
   ASSERT_EQ(static_cast<int>(round_trip_us.size()), kRoundTrips);
   EXPECT_EQ(echoed.load(), kRoundTrips);
 
-  std::printf("[ figures  ] %s round trip (send, echo by another thread, receive): median %.1f us, "
-              "p99 %.1f us, max %.1f us over %d frames\n",
-              kBus, median(round_trip_us), percentile(round_trip_us, 0.99),
-              *std::max_element(round_trip_us.begin(), round_trip_us.end()), kRoundTrips);
+  std::printf(
+      "[ figures  ] %s round trip (send, echo by another thread, receive): median %.1f us, "
+      "p99 %.1f us, max %.1f us over %d frames\n",
+      kBus, median(round_trip_us), percentile(round_trip_us, 0.99),
+      *std::max_element(round_trip_us.begin(), round_trip_us.end()), kRoundTrips);
   RecordProperty("round_trip_median_us", std::to_string(median(round_trip_us)));
 }
 

@@ -60,8 +60,9 @@ std::vector<dds::ForearmCommandSample> poll_while(dds::ForearmDdsBridge& bridge,
 TEST(ForearmCli, RunCommandReachesTheBridge) {
   dds::ForearmDdsBridge bridge(95, 1, dds::loopback_config());
   auto cli = std::async(std::launch::async, [] {
-    return run_cli("--domain 95 --node 1 --timeout 30 run --strategy coarse_20ms --sine 20 0.5 "
-                   "--offset 10 --duration 12 --sequence 42");
+    return run_cli(
+        "--domain 95 --node 1 --timeout 30 run --strategy coarse_20ms --sine 20 0.5 "
+        "--offset 10 --duration 12 --sequence 42");
   });
   const std::vector<dds::ForearmCommandSample> accepted = poll_while(bridge, cli, 1);
   const Outcome outcome = cli.get();
@@ -121,8 +122,9 @@ TEST(ForearmCli, RawMalformedSamplesAreRejectedByTheBridge) {
 // Watches while the bridge publishes as the host loop does, every 4 ms, until the CLI exits.
 template <class Sample>
 Outcome watch_while_publishing(dds::ForearmDdsBridge& bridge, const Sample& sample) {
-  auto cli = std::async(std::launch::async,
-                        [] { return run_cli("--domain 98 --node 4 --timeout 30 watch --samples 3"); });
+  auto cli = std::async(std::launch::async, [] {
+    return run_cli("--domain 98 --node 4 --timeout 30 watch --samples 3");
+  });
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(2 * kPatience_s);
   while (cli.wait_for(std::chrono::milliseconds(4)) != std::future_status::ready &&
@@ -148,8 +150,7 @@ TEST(ForearmCli, WatchPrintsTheBridgesStateAndTelemetry) {
   telemetry.solve_time_us = 2345;
   const Outcome telemetries = watch_while_publishing(bridge, telemetry);
   EXPECT_EQ(telemetries.status, 0) << telemetries.output;
-  EXPECT_NE(telemetries.output.find("telemetry node 4 "), std::string::npos)
-      << telemetries.output;
+  EXPECT_NE(telemetries.output.find("telemetry node 4 "), std::string::npos) << telemetries.output;
   EXPECT_NE(telemetries.output.find("status budget_exhausted"), std::string::npos)
       << telemetries.output;
   EXPECT_NE(telemetries.output.find("solve 2345 us"), std::string::npos) << telemetries.output;
@@ -191,7 +192,8 @@ TEST(ForearmCli, BadArgumentsExit2NamingTheProblem) {
     const Outcome outcome = run_cli(c.arguments);
     EXPECT_EQ(outcome.status, 2) << c.arguments << "\n" << outcome.output;
     EXPECT_NE(outcome.output.find(c.message), std::string::npos)
-        << c.arguments << ": no '" << c.message << "' in\n" << outcome.output;
+        << c.arguments << ": no '" << c.message << "' in\n"
+        << outcome.output;
   }
 }
 

@@ -39,8 +39,8 @@ TEST(ForearmCommandValidation, AcceptsAGoodCommand) {
 }
 
 TEST(ForearmCommandValidation, AcceptsEveryModeStrategyAndKind) {
-  for (auto mode : {proto::RequestedMode::kIdle, proto::RequestedMode::kHold,
-                    proto::RequestedMode::kRun}) {
+  for (auto mode :
+       {proto::RequestedMode::kIdle, proto::RequestedMode::kHold, proto::RequestedMode::kRun}) {
     for (const proto::EnumValue& strategy : proto::kStrategyValues) {
       for (auto kind : {dds::TargetKind::kHoldCurrent, dds::TargetKind::kSinusoid}) {
         dds::ForearmCommandSample c = good_command();
@@ -93,8 +93,7 @@ TEST(ForearmCommandValidation, RejectsEachBadFieldNamingIt) {
       {"mode past run", [](auto& c) { c.mode = static_cast<proto::RequestedMode>(4); }, "mode"},
       {"strategy past PAM-only", [](auto& c) { c.strategy = static_cast<proto::Strategy>(6); },
        "strategy"},
-      {"strategy 255", [](auto& c) { c.strategy = static_cast<proto::Strategy>(255); },
-       "strategy"},
+      {"strategy 255", [](auto& c) { c.strategy = static_cast<proto::Strategy>(255); }, "strategy"},
       {"target kind 2", [](auto& c) { c.target.kind = static_cast<dds::TargetKind>(2); },
        "target.kind"},
       {"NaN amplitude", [](auto& c) { c.target.amplitude_rad = kNaN; }, "target.amplitude_rad"},
@@ -108,13 +107,11 @@ TEST(ForearmCommandValidation, RejectsEachBadFieldNamingIt) {
        "target.amplitude_rad"},
       {"infinite frequency", [](auto& c) { c.target.frequency_hz = kInf; }, "target.frequency_hz"},
       {"negative frequency", [](auto& c) { c.target.frequency_hz = -1; }, "target.frequency_hz"},
-      {"frequency past 5 Hz", [](auto& c) { c.target.frequency_hz = 5.01; },
-       "target.frequency_hz"},
+      {"frequency past 5 Hz", [](auto& c) { c.target.frequency_hz = 5.01; }, "target.frequency_hz"},
       {"NaN offset", [](auto& c) { c.target.offset_rad = kNaN; }, "target.offset_rad"},
       {"offset past 1 rad", [](auto& c) { c.target.offset_rad = -1.01; }, "target.offset_rad"},
       {"negative duration", [](auto& c) { c.target.duration_s = -1; }, "target.duration_s"},
-      {"duration past an hour", [](auto& c) { c.target.duration_s = 3600.5; },
-       "target.duration_s"},
+      {"duration past an hour", [](auto& c) { c.target.duration_s = 3600.5; }, "target.duration_s"},
       {"infinite duration", [](auto& c) { c.target.duration_s = -kInf; }, "target.duration_s"},
       {"sinusoid above the joint limit",
        [](auto& c) {

@@ -27,7 +27,8 @@ constexpr double kPatience_s = 30;
 // Polls until done() or kPatience_s passed; true if done.
 template <class Done>
 bool eventually(Done done) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kPatience_s);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(kPatience_s);
   while (!done()) {
     if (std::chrono::steady_clock::now() > deadline) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -90,10 +91,10 @@ TEST(ForearmDdsBridge, MalformedCommandsAreCountedAndNeverPassedOn) {
   bad.back().strategy = static_cast<proto::Strategy>(9);
   bad.push_back(run_command(3, 4));
   bad.back().mode = static_cast<proto::RequestedMode>(0);
-  bad.push_back(run_command(5, 5));  // another board's command
+  bad.push_back(run_command(5, 5));   // another board's command
   bad.push_back(run_command(20, 6));  // no such node
   bad.push_back(run_command(3, 7));
-  bad.back().target.offset_rad = 1.0;  // each in range, but the peak of 1.9 rad is past
+  bad.back().target.offset_rad = 1.0;     // each in range, but the peak of 1.9 rad is past
   bad.back().target.amplitude_rad = 0.9;  // the board's software limit
 
   testing::internal::CaptureStderr();
@@ -104,21 +105,21 @@ TEST(ForearmDdsBridge, MalformedCommandsAreCountedAndNeverPassedOn) {
 
   std::set<std::uint32_t> accepted;
   const bool all_arrived = eventually([&] {
-    bridge.poll_commands([&](const dds::ForearmCommandSample& c) {
-      accepted.insert(c.sequence_number);
-    });
+    bridge.poll_commands(
+        [&](const dds::ForearmCommandSample& c) { accepted.insert(c.sequence_number); });
     return accepted.size() + bridge.rejected_commands() >= bad.size() + 2;
   });
   const std::string log = testing::internal::GetCapturedStderr();
   ASSERT_TRUE(all_arrived) << "accepted " << accepted.size() << ", rejected "
-                           << bridge.rejected_commands() << "\n" << log;
+                           << bridge.rejected_commands() << "\n"
+                           << log;
   EXPECT_EQ(accepted, (std::set<std::uint32_t>{1, 8}));
   EXPECT_EQ(bridge.rejected_commands(), bad.size());
-  for (const char* reason : {"command 2: target.amplitude_rad is not finite",
-                             "command 3: strategy 9 ", "command 4: mode 0 ",
-                             "command 5: for node 5, this bridge is node 3",
-                             "command 6: node 20 is outside 0..15",
-                             "command 7: target.offset_rad +- target.amplitude_rad spans"}) {
+  for (const char* reason :
+       {"command 2: target.amplitude_rad is not finite", "command 3: strategy 9 ",
+        "command 4: mode 0 ", "command 5: for node 5, this bridge is node 3",
+        "command 6: node 20 is outside 0..15",
+        "command 7: target.offset_rad +- target.amplitude_rad spans"}) {
     EXPECT_NE(log.find(reason), std::string::npos) << "no '" << reason << "' in:\n" << log;
   }
 }
@@ -199,7 +200,8 @@ TEST(ForearmDdsBridge, PublishedStateAndTelemetryReachAReaderUnchanged) {
 TEST(ForearmDdsBridge, RefusesABadNodeOrConfiguration) {
   EXPECT_THROW(dds::ForearmDdsBridge(94, 16, dds::loopback_config()), std::invalid_argument);
   try {
-    dds::ForearmDdsBridge bridge(94, 0, "<CycloneDDS><Domain><NoSuchSetting/></Domain></CycloneDDS>");
+    dds::ForearmDdsBridge bridge(94, 0,
+                                 "<CycloneDDS><Domain><NoSuchSetting/></Domain></CycloneDDS>");
     FAIL() << "an invalid configuration was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("cannot create DDS domain 94"), std::string::npos)
@@ -211,15 +213,12 @@ TEST(ForearmDdsBridge, RefusesABadNodeOrConfiguration) {
     dds::ForearmDdsClient client(94, dds::loopback_config() + "<!-- another -->");
     FAIL() << "a second configuration of domain 94 was accepted";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("another configuration"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("another configuration"), std::string::npos) << e.what();
   }
   // The same one is shared, and the domain outlives whichever of its users goes first.
   auto client = std::make_unique<dds::ForearmDdsClient>(94, dds::loopback_config());
   EXPECT_TRUE(client->wait_for_bridge(kPatience_s));
-  {
-    dds::ForearmDdsBridge second(94, 1, dds::loopback_config());
-  }
+  { dds::ForearmDdsBridge second(94, 1, dds::loopback_config()); }
   EXPECT_TRUE(client->send(run_command(0, 1)));
   std::size_t received = 0;
   EXPECT_TRUE(eventually([&] {

@@ -48,7 +48,7 @@ void run_all(Observer& observer, Report& report) {
     proto::Frame f;
     if (tick % 10 == 0) {
       proto::ModeCommand m;
-      m.mode = tick >= kRunStart ? proto::RequestedMode::kRun
+      m.mode = tick >= kRunStart    ? proto::RequestedMode::kRun
                : tick >= kHoldStart ? proto::RequestedMode::kHold
                                     : proto::RequestedMode::kIdle;
       m.strategy = proto::Strategy::kTwoStage;

@@ -166,15 +166,14 @@ int main(int argc, char** argv) {
               host.values.size(), kRelativeTolerance);
 
   for (const auto& [method, text] : instructions) {
-    std::printf("instructions per MPC update on the target, %s:%s\n", method.c_str(),
-                text.c_str());
+    std::printf("instructions per MPC update on the target, %s:%s\n", method.c_str(), text.c_str());
     std::istringstream fields(text);
     std::string label;
     double max = 0, median = 0;
     fields >> label >> label >> max >> label >> median;
     // An estimate, not a measurement: QEMU counts instructions, not cycles.
-    std::printf("  at %d MHz and 1 cycle per instruction: max %.0f us, median %.0f us\n",
-                kClockMHz, max / kClockMHz, median / kClockMHz);
+    std::printf("  at %d MHz and 1 cycle per instruction: max %.0f us, median %.0f us\n", kClockMHz,
+                max / kClockMHz, median / kClockMHz);
   }
 
   // Least-squares fit of the compute model (hmpc/mpc/compute_model.hpp): instructions =
@@ -200,13 +199,16 @@ int main(int argc, char** argv) {
     }
     const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
     const double r2 = 1.0 - (b - A * c).squaredNorm() / (b.array() - b.mean()).square().sum();
-    std::printf("compute model fit over %zu updates (R^2 %.4f): per update %.0f; upper layer "
-                "%.1f/rollout step, %.1f/derivative step", all.size(), r2, c(0), c(1), c(2));
+    std::printf(
+        "compute model fit over %zu updates (R^2 %.4f): per update %.0f; upper layer "
+        "%.1f/rollout step, %.1f/derivative step",
+        all.size(), r2, c(0), c(1), c(2));
     if (any_fast) std::printf("; fast layer %.1f/step of either kind", c(3));
     std::printf(" instructions\n");
   }
 
-  if (const hmpc::ComputeCostModel* model = hmpc::closed_loop_check::compute_model_to_verify<Scalar>()) {
+  if (const hmpc::ComputeCostModel* model =
+          hmpc::closed_loop_check::compute_model_to_verify<Scalar>()) {
     for (const auto& [method, list] : updates) {
       double measured = 0, predicted = 0;
       for (const Update& u : list) {

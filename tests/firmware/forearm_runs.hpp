@@ -39,9 +39,9 @@ void run_one(const char* name, Mpc& mpc, Observer& observer, Report& report) {
   const Eigen::Matrix<Scalar, 3, 1> x0(Scalar(0), Scalar(0),
                                        forearm::equilibrium_pressure(p, Scalar(0)));
   Counting<Observer> counting{observer};
-  const auto outcome = forearm::simulate_tracking<Scalar>(
-      mpc, p, forearm::CostWeights<Scalar>{}, Store::target, x0, kSamples,
-      forearm::NoComputeDelay{}, counting);
+  const auto outcome =
+      forearm::simulate_tracking<Scalar>(mpc, p, forearm::CostWeights<Scalar>{}, Store::target, x0,
+                                         kSamples, forearm::NoComputeDelay{}, counting);
   report.method(name, outcome.final_state, outcome.accumulated_cost, counting.totals);
 }
 

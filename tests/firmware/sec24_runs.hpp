@@ -2,8 +2,8 @@
 #pragma once
 
 #include "closed_loop_check.hpp"
-#include "hmpc/mpc/compute_model.hpp"
 #include "hmpc/models/singularly_perturbed_example_mpc.hpp"
+#include "hmpc/mpc/compute_model.hpp"
 
 namespace hmpc::closed_loop_check {
 

@@ -2,7 +2,8 @@
 // FPU, reporting results (exact bits) for comparison with the host, and instructions per MPC
 // update with the solver's work counters, counted by SysTick under QEMU -icount shift=0.
 // Output lines: "update <instructions> <upper rollout> <upper derivative> <fast rollout>
-// <fast derivative>" (solver work in steps) for each update of a run, then "result/count/instructions <method> ..." when the run ends.
+// <fast derivative>" (solver work in steps) for each update of a run, then
+// "result/count/instructions <method> ..." when the run ends.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -8,7 +8,7 @@
 //
 // Built as a libFuzzer binary with clang (HMPC_BUILD_FUZZERS), and with HMPC_FUZZ_REPLAY as a
 // plain program that runs the same entry point on a fixed-seed corpus of random inputs and
-// bit-flipped valid frames, so every CI run checks the properties.
+// bit-flipped valid frames, so every CI run checks the properties (tests/fuzz/CMakeLists.txt).
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -145,6 +145,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 #include <random>
 #include <vector>
 
+#include "fuzz_replay.hpp"
+
 namespace {
 
 // A frame the decoders accept: random node and frame type, each signal a random valid raw
@@ -178,10 +180,20 @@ std::vector<std::uint8_t> bytes_of(const Frame& frame) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
   constexpr int kRandomInputs = 100000;
   constexpr int kFlippedFrames = 100000;
   std::mt19937_64 rng(0x5eed'f0ea'4a11ull);
+  if (argc > 1) {  // --write-corpus DIR: sequences of valid frames, the libFuzzer run's seeds
+    std::vector<hmpc::fuzz::Bytes> seeds(32);
+    for (hmpc::fuzz::Bytes& seed : seeds) {
+      for (int f = 0; f < 4; ++f) {
+        const std::vector<std::uint8_t> frame = bytes_of(random_valid_frame(rng));
+        seed.insert(seed.end(), frame.begin(), frame.end());
+      }
+    }
+    return hmpc::fuzz::replay(argc, argv, "protocol_fuzz_replay", seeds, 0, 0);
+  }
   std::vector<std::uint8_t> input;
   for (int n = 0; n < kRandomInputs; ++n) {
     input.resize(rng() % (4 * kBytesPerFrame + 1));

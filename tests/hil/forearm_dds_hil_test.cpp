@@ -31,8 +31,8 @@ std::string dir() {
 
 int run_cli(const std::vector<std::string>& args, std::string& output) {
   Child cli;
-  std::vector<std::string> all{"--domain", std::to_string(kDomain), "--dds-loopback",
-                               "--timeout", "60"};
+  std::vector<std::string> all{"--domain", std::to_string(kDomain), "--dds-loopback", "--timeout",
+                               "60"};
   all.insert(all.end(), args.begin(), args.end());
   std::string error;
   if (!cli.start(HMPC_FOREARM_CLI_PROGRAM, all, dir() + "/cli.out", error)) {
@@ -92,8 +92,8 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
   // NaN amplitude: the host's bridge rejects it; the board keeps running as it was, with the
   // same strategy and the same 20 deg target, for the 0.2 s of host time watched after the
   // host has said so (50 MPC periods, time enough for a command acted on to show).
-  ASSERT_EQ(run_cli({"--raw-sample", "run", "--strategy", "two_stage", "--sine", "nan", "1"},
-                    output), 0)
+  ASSERT_EQ(
+      run_cli({"--raw-sample", "run", "--strategy", "two_stage", "--sine", "nan", "1"}, output), 0)
       << output;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
   while (host.errors().find("amplitude") == std::string::npos &&
@@ -117,7 +117,8 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
   }
   EXPECT_GE(last_s - first_s, 0.2) << "too few states after the rejected command";
   EXPECT_GT(watched, 0);
-  EXPECT_EQ(unchanged, watched) << "the rejected command changed the board's mode, strategy or target";
+  EXPECT_EQ(unchanged, watched)
+      << "the rejected command changed the board's mode, strategy or target";
   // A valid command after it proves the bridge is still listening.
   ASSERT_EQ(run_cli({"idle"}, output), 0) << output;
   EXPECT_TRUE(await_mode(client, proto::BoardMode::kIdle)) << "the board never went idle";

@@ -67,8 +67,8 @@ std::uint32_t expect_safe_fault(const HilRunResult& r, unsigned bits) {
   }
   bool board_safe = true;
   for (const BoardTickRow* row = fault; row != r.board_log.data() + r.board_log.size(); ++row) {
-    board_safe = board_safe && row->mode == "fault" && row->faults == bits && row->v_p == 0 &&
-                 row->v_m == 0;
+    board_safe =
+        board_safe && row->mode == "fault" && row->faults == bits && row->v_p == 0 && row->v_m == 0;
   }
   EXPECT_TRUE(board_safe) << "the board left the safe state after tick " << fault->tick;
   // Plant row k: step k, driven by the answer to Sync k, computed in board tick k + 1.
@@ -91,10 +91,11 @@ void expect_heartbeat_trip_latency(const HilRunResult& r, std::uint32_t fault_ti
   const BoardTickRow& row = r.board_log.at(fault_tick - r.board_log.front().tick);
   EXPECT_EQ(double(row.heartbeat_age), timeout + 1);
   const double last_sent_tick = std::round(r.number(r.host, "last_heartbeat_s") * 1e3);
-  std::printf("heartbeat watchdog: last heartbeat sent at host tick %.0f, safe outputs from "
-              "board tick %u (%.0f ticks, %.1f MPC periods; timeout %.0f ticks)\n",
-              last_sent_tick, fault_tick, fault_tick - last_sent_tick,
-              (fault_tick - last_sent_tick) / 4, timeout);
+  std::printf(
+      "heartbeat watchdog: last heartbeat sent at host tick %.0f, safe outputs from "
+      "board tick %u (%.0f ticks, %.1f MPC periods; timeout %.0f ticks)\n",
+      last_sent_tick, fault_tick, fault_tick - last_sent_tick, (fault_tick - last_sent_tick) / 4,
+      timeout);
   EXPECT_GT(double(fault_tick), last_sent_tick + timeout);
   EXPECT_LE(double(fault_tick), last_sent_tick + timeout + 2);
 }
@@ -113,8 +114,9 @@ TEST(ForearmHilFaults, DeadHostTripsTheWatchdogIntoTheSafeState) {
 
 TEST(ForearmHilFaults, HundredMillisecondsOfHostSilenceTripTheWatchdog) {
   HilRunSpec s;
-  const HilRunResult r = run_fault("host_silence", {"--host-timeout", "0.3"},
-                                   {"--silence-at", std::to_string(kFaultAtS), "--silence-ms", "100"}, s);
+  const HilRunResult r =
+      run_fault("host_silence", {"--host-timeout", "0.3"},
+                {"--silence-at", std::to_string(kFaultAtS), "--silence-ms", "100"}, s);
   ASSERT_NO_FATAL_FAILURE(expect_intact(r, s));
   const std::uint32_t fault_tick = expect_safe_fault(r, proto::fault::kHeartbeatTimeout);
   ASSERT_GT(fault_tick, 0u);
@@ -141,9 +143,10 @@ TEST(ForearmHilFaults, HundredMillisecondsOfSensorSilenceFaultTheBoard) {
   const double timeout = r.number(r.board, "sensor_timeout_ticks");
   const BoardTickRow& row = r.board_log.at(fault_tick - r.board_log.front().tick);
   EXPECT_EQ(double(row.sensor_age), timeout + 1);
-  std::printf("sensor watchdog: readings stop after board tick %u, safe outputs from tick %u "
-              "(%u ticks; timeout %.0f ticks)\n",
-              kFaultAtTick, fault_tick, fault_tick - kFaultAtTick, timeout);
+  std::printf(
+      "sensor watchdog: readings stop after board tick %u, safe outputs from tick %u "
+      "(%u ticks; timeout %.0f ticks)\n",
+      kFaultAtTick, fault_tick, fault_tick - kFaultAtTick, timeout);
   EXPECT_GE(double(fault_tick), kFaultAtTick + timeout);
   EXPECT_LE(double(fault_tick), kFaultAtTick + timeout + 1);
 }
@@ -152,8 +155,8 @@ TEST(ForearmHilFaults, CorruptedAndDroppedSensorFramesAreRiddenThrough) {
   // 5 % lost and 5 % corrupted: five readings in a row go missing with probability 1e-5 per
   // tick, so the board keeps running on the readings it accepts and rejects the corrupt ones.
   HilRunSpec s;
-  const HilRunResult r = run_fault("sensor_loss",
-                                   {"--drop-percent", "5", "--corrupt-percent", "5"}, {}, s);
+  const HilRunResult r =
+      run_fault("sensor_loss", {"--drop-percent", "5", "--corrupt-percent", "5"}, {}, s);
   ASSERT_NO_FATAL_FAILURE(expect_intact(r, s));
   EXPECT_EQ(r.host.at("board_mode"), "hold");  // the run ended normally
   EXPECT_EQ(r.number(r.host, "board_faults"), 0);
@@ -179,8 +182,8 @@ TEST(ForearmHilFaults, DelayedSensorsStillTrack) {
 // longest interval between intact heartbeats in hold or run exceeds the watchdog's timeout.
 TEST(ForearmHilFaults, CorruptedHostFramesAreRejectedNeverActedOn) {
   HilRunSpec s;
-  const HilRunResult r = run_fault("host_corrupt", {"--host-timeout", "0.3"},
-                                   {"--corrupt-percent", "20"}, s);
+  const HilRunResult r =
+      run_fault("host_corrupt", {"--host-timeout", "0.3"}, {"--corrupt-percent", "20"}, s);
   ASSERT_NO_FATAL_FAILURE(expect_intact(r, s));
   EXPECT_GT(r.number(r.host, "frames_corrupted"), 10);
   EXPECT_EQ(r.number(r.board, "rejected_frames"), r.number(r.host, "frames_corrupted"));

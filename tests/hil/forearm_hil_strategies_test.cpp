@@ -58,11 +58,12 @@ class ForearmHilStrategies : public ::testing::Test {
     second.join();
     for (Strategy s : strategies) {
       const HilRunResult& r = results_.at(s);
-      std::printf("%-12s cost %8.1f  RMS %.3f deg  max solve %.2f ms  median %.2f ms  misses %.0f"
-                  "  motor share %.1f %%  plant RTF %.2f\n",
-                  name_of(s).c_str(), r.accumulated_cost, r.rms_error * 180 / M_PI,
-                  r.solve_time_max_us / 1e3, r.solve_time_median_us / 1e3, r.deadline_misses,
-                  100 * r.motor_share(), r.number(r.plant, "real_time_factor"));
+      std::printf(
+          "%-12s cost %8.1f  RMS %.3f deg  max solve %.2f ms  median %.2f ms  misses %.0f"
+          "  motor share %.1f %%  plant RTF %.2f\n",
+          name_of(s).c_str(), r.accumulated_cost, r.rms_error * 180 / M_PI,
+          r.solve_time_max_us / 1e3, r.solve_time_median_us / 1e3, r.deadline_misses,
+          100 * r.motor_share(), r.number(r.plant, "real_time_factor"));
     }
   }
   static std::string name_of(Strategy s) {
@@ -103,10 +104,14 @@ TEST_F(ForearmHilStrategies, TwoStageHasTheLowestCost) {
 // on the same model), and the Two-stage, a Coarse 20 ms solve and a 20-step fast one, fits
 // the period. Misses are counted exactly where a charged solve exceeds the board's budget.
 TEST_F(ForearmHilStrategies, SolveTimesGrowWithTheProblemAndMissesFollowThem) {
-  EXPECT_GT(result(Strategy::kFine4ms).solve_time_max_us, result(Strategy::kFine8ms).solve_time_max_us);
-  EXPECT_GT(result(Strategy::kFine8ms).solve_time_max_us, result(Strategy::kCoarse20ms).solve_time_max_us);
-  EXPECT_GT(result(Strategy::kCoarse20ms).solve_time_max_us, result(Strategy::kCoarse40ms).solve_time_max_us);
-  EXPECT_GT(result(Strategy::kTwoStage).solve_time_max_us, result(Strategy::kCoarse20ms).solve_time_max_us);
+  EXPECT_GT(result(Strategy::kFine4ms).solve_time_max_us,
+            result(Strategy::kFine8ms).solve_time_max_us);
+  EXPECT_GT(result(Strategy::kFine8ms).solve_time_max_us,
+            result(Strategy::kCoarse20ms).solve_time_max_us);
+  EXPECT_GT(result(Strategy::kCoarse20ms).solve_time_max_us,
+            result(Strategy::kCoarse40ms).solve_time_max_us);
+  EXPECT_GT(result(Strategy::kTwoStage).solve_time_max_us,
+            result(Strategy::kCoarse20ms).solve_time_max_us);
   EXPECT_LT(result(Strategy::kTwoStage).solve_time_max_us, kSolveBudgetUs);
   for (const auto& [strategy, r] : results_) {
     SCOPED_TRACE(name_of(strategy));
@@ -119,7 +124,8 @@ TEST_F(ForearmHilStrategies, SolveTimesGrowWithTheProblemAndMissesFollowThem) {
 // period; where it fits, nothing is asserted (the finest model may then be the best).
 TEST_F(ForearmHilStrategies, AnOverrunningFineMpcCostsMoreThanTheOnesThatFit) {
   const HilRunResult& fine4 = result(Strategy::kFine4ms);
-  if (fine4.deadline_misses == 0) GTEST_SKIP() << "Fine 4 ms fits the period on the target: no overrun to pay for";
+  if (fine4.deadline_misses == 0)
+    GTEST_SKIP() << "Fine 4 ms fits the period on the target: no overrun to pay for";
   for (Strategy s : {Strategy::kFine8ms, Strategy::kCoarse20ms, Strategy::kTwoStage}) {
     EXPECT_GT(fine4.accumulated_cost, result(s).accumulated_cost) << name_of(s);
   }

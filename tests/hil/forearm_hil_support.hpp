@@ -44,8 +44,7 @@ inline void expect_intact(const HilRunResult& r, const HilRunSpec& s) {
   const double steps = r.number(r.plant, "steps");
   EXPECT_EQ(steps, std::round((s.run_at_s + s.run_for_s + s.settle_s) * 1e3));
   EXPECT_EQ(double(lines_of(s.directory + "/plant.csv")), steps + 1);  // with the header
-  EXPECT_EQ(double(lines_of(s.directory + "/host.csv")),
-            r.number(r.host, "telemetry_frames") + 1);
+  EXPECT_EQ(double(lines_of(s.directory + "/host.csv")), r.number(r.host, "telemetry_frames") + 1);
   EXPECT_TRUE(r.within_stops) << "theta range [" << r.theta_min << ", " << r.theta_max << "]";
   EXPECT_EQ(r.number(r.board, "heap_allocations_in_loop"), 0);
 }

@@ -192,8 +192,8 @@ TEST(SimbodyForearm, FullDriveHoldsTheArmAgainstTheUpperStop) {
                          p.mass * p.gravity * p.com_distance * std::cos(rest.theta);
   EXPECT_GT(pushing, 0.0);
   EXPECT_NEAR(rest.theta, p.stop_upper + pushing / p.stop_stiffness, 1e-6);
-  EXPECT_NEAR(plant.pam_torque(),
-              hmpc::forearm::pam_torque(p, rest.pressure_bar, rest.theta).tau, 1e-12);
+  EXPECT_NEAR(plant.pam_torque(), hmpc::forearm::pam_torque(p, rest.pressure_bar, rest.theta).tau,
+              1e-12);
   EXPECT_DOUBLE_EQ(plant.motor_torque(), p.motor_gain * p.v_m_max);
   EXPECT_LT(std::abs(rest.theta_dot), 1e-4);
 }
@@ -302,8 +302,8 @@ TEST(SimbodyForearm, HeapUseIsSimbodysOwnAndBounded) {
   heap_monitor::arm();
   // Changing inputs, a fall onto the lower stop, and bad commands.
   for (int k = 0; k < steps; ++k) {
-    const double v_p = (k % 500 == 7) ? std::numeric_limits<double>::quiet_NaN()
-                                      : 0.5 + 0.5 * std::sin(0.01 * k);
+    const double v_p =
+        (k % 500 == 7) ? std::numeric_limits<double>::quiet_NaN() : 0.5 + 0.5 * std::sin(0.01 * k);
     plant.step(v_p, 4.0 * std::sin(0.02 * k));
   }
   heap_monitor::disarm();

@@ -1,9 +1,9 @@
 // The box QP of box-DDP against brute-force enumeration of active sets.
+#include "hmpc/solver/box_qp.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include "hmpc/solver/box_qp.hpp"
 
 namespace {
 
@@ -39,8 +39,7 @@ V3 brute_force(const M3& H, const V3& g, const V3& lo, const V3& hi) {
       const Eigen::VectorXd xf = Hff.ldlt().solve(rhs);
       for (size_t a = 0; a < free.size(); ++a) x(free[a]) = xf(a);
     }
-    if ((x.array() < lo.array() - 1e-12).any() || (x.array() > hi.array() + 1e-12).any())
-      continue;
+    if ((x.array() < lo.array() - 1e-12).any() || (x.array() > hi.array() + 1e-12).any()) continue;
     const double f = objective(H, g, x);
     if (f < best) {
       best = f;
@@ -74,8 +73,8 @@ TEST(BoxQp, ReportsIndefiniteHessian) {
   M3 H = M3::Identity();
   H(1, 1) = -1;
   hmpc::BoxQpSolution<double, 3> sol;
-  hmpc::solve_box_qp<double, 3>(H, V3(1, 1, 1), V3::Constant(-1e9), V3::Constant(1e9),
-                                V3::Zero(), sol);
+  hmpc::solve_box_qp<double, 3>(H, V3(1, 1, 1), V3::Constant(-1e9), V3::Constant(1e9), V3::Zero(),
+                                sol);
   EXPECT_EQ(sol.status, hmpc::BoxQpStatus::kNotPositiveDefinite);
   EXPECT_FALSE(sol.usable());
 }

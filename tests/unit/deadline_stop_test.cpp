@@ -21,7 +21,9 @@ struct ManualClock {
 using Stop = hmpc::DeadlineStop<ManualClock>;
 using Time = hmpc::IterationTime<ManualClock>;
 
-ManualClock::time_point at(std::int64_t ms) { return ManualClock::time_point(ManualClock::duration(ms)); }
+ManualClock::time_point at(std::int64_t ms) {
+  return ManualClock::time_point(ManualClock::duration(ms));
+}
 
 // Iterations of `length` ms from `first` on until the stop fires (or `cap` of them ran);
 // returns how many ran.

@@ -3,6 +3,8 @@
 // Eq. 3.1 on hmpc::forearm::integrate at 1 ms, sends a Sensor frame before every tick and
 // applies the ActuatorCommand the board sends back. Board frames are decoded by a host-side
 // Receiver, so every one of them must pass the protocol's checks too.
+#include "forearm_board.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,7 +13,6 @@
 #include <memory>
 #include <vector>
 
-#include "forearm_board.hpp"
 #include "hmpc/models/forearm.hpp"
 
 namespace {
@@ -47,6 +48,7 @@ struct StepOptions {
 
 class Rig {
  public:
+  // cppcheck-suppress passedByValue ; a function pointer, which cppcheck takes for a class
   explicit Rig(double theta0 = 0.0, Board::WallClock clock = nullptr,
                const Board::Config& board_config = config())
       : board_(std::make_unique<Board>(board_config, clock)),
@@ -120,15 +122,15 @@ class Rig {
       next_sample_us_ += kSamplePeriodUs;
     }
     if (options.sensor) {
-      deliver(encode(plant_, proto::SensorSample{float(x_(0)), float(x_(1)),
-                                                 float(x_(2) / 10), 0}));  // bar -> MPa
+      deliver(encode(plant_, proto::SensorSample{float(x_(0)), float(x_(1)), float(x_(2) / 10),
+                                                 0}));  // bar -> MPa
     }
     board_->tick();
     if (board_->mpc_due()) board_->run_mpc();
     collect_board_frames();
     // Eq. 3.1's input order: u = [v_m, v_p].
-    x_ = hmpc::forearm::integrate(params_, x_, Eigen::Vector2d(last_command_.v_m,
-                                                               last_command_.v_p), 1e-3);
+    x_ = hmpc::forearm::integrate(params_, x_,
+                                  Eigen::Vector2d(last_command_.v_m, last_command_.v_p), 1e-3);
     ++tick_;
   }
   void run(int ticks, StepOptions options = {}) {
@@ -326,9 +328,10 @@ TEST(ForearmBoard, InvalidFramesAreRejectedCountedAndNotActedOn) {
   // (on a shared bus that would count every other node's traffic). Relabelled with this
   // node's id it fails the checksum, which covers the id.
   proto::Sender other_host(kNode + 1);
-  ASSERT_EQ(other_host.encode(proto::ModeCommand{RequestedMode::kHold, Strategy::kTwoStage,
-                                                 false, rig.now_us(), 0}, f),
-            proto::EncodeResult::kOk);
+  ASSERT_EQ(
+      other_host.encode(
+          proto::ModeCommand{RequestedMode::kHold, Strategy::kTwoStage, false, rig.now_us(), 0}, f),
+      proto::EncodeResult::kOk);
   rig.deliver(f);
   EXPECT_EQ(rejects.total(), 7u);
   f.id = proto::frame_id(proto::FrameType::kModeCommand, kNode);

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <random>
 
@@ -23,7 +22,9 @@ struct Fixture : ::testing::Test {
   TargetTrajectory<double> target;
   std::mt19937 rng{7};
   Fixture() { target.set_sinusoid(30 * kDeg, 0.5, 0.0, 0.0); }
-  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+  double uniform(double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  }
   V3 random_state() { return V3(uniform(-60 * kDeg, 80 * kDeg), uniform(-4, 4), uniform(0.1, 5)); }
   V2 random_input() { return V2(uniform(-5, 5), uniform(0, 5)); }
 };
@@ -32,12 +33,16 @@ TEST_F(Fixture, PamTorquePartialsMatchFiniteDifferences) {
   for (int i = 0; i < 50; ++i) {
     const double P = uniform(0.1, 5), th = uniform(-1, 1.4), h = 1e-6;
     const auto t = pam_torque(p, P, th);
-    EXPECT_NEAR(t.d_pressure, (pam_torque(p, P + h, th).tau - pam_torque(p, P - h, th).tau) / (2 * h), 1e-5);
-    EXPECT_NEAR(t.d_theta, (pam_torque(p, P, th + h).tau - pam_torque(p, P, th - h).tau) / (2 * h), 1e-5);
+    EXPECT_NEAR(t.d_pressure,
+                (pam_torque(p, P + h, th).tau - pam_torque(p, P - h, th).tau) / (2 * h), 1e-5);
+    EXPECT_NEAR(t.d_theta, (pam_torque(p, P, th + h).tau - pam_torque(p, P, th - h).tau) / (2 * h),
+                1e-5);
     EXPECT_NEAR(t.d_theta_theta,
-                (pam_torque(p, P, th + h).d_theta - pam_torque(p, P, th - h).d_theta) / (2 * h), 1e-4);
+                (pam_torque(p, P, th + h).d_theta - pam_torque(p, P, th - h).d_theta) / (2 * h),
+                1e-4);
     EXPECT_NEAR(t.d_theta_pressure,
-                (pam_torque(p, P + h, th).d_theta - pam_torque(p, P - h, th).d_theta) / (2 * h), 1e-4);
+                (pam_torque(p, P + h, th).d_theta - pam_torque(p, P - h, th).d_theta) / (2 * h),
+                1e-4);
   }
 }
 
@@ -66,8 +71,10 @@ TEST_F(Fixture, FullProblemDynamicsJacobiansMatchFiniteDifferences) {
       Eigen::Matrix3d A, A_fd;
       Eigen::Matrix<double, 3, 2> B, B_fd;
       problem.dynamics_derivatives(x, u, 0, A, B);
-      hmpc::central_difference_jacobian([&](const V3& xp) { return problem.dynamics(xp, u, 0); }, x, A_fd);
-      hmpc::central_difference_jacobian([&](const V2& up) { return problem.dynamics(x, up, 0); }, u, B_fd);
+      hmpc::central_difference_jacobian([&](const V3& xp) { return problem.dynamics(xp, u, 0); }, x,
+                                        A_fd);
+      hmpc::central_difference_jacobian([&](const V2& up) { return problem.dynamics(x, up, 0); }, u,
+                                        B_fd);
       EXPECT_LT((A - A_fd).norm(), 1e-7 * (1 + A.norm()));
       EXPECT_LT((B - B_fd).norm(), 1e-7 * (1 + B.norm()));
     }
@@ -87,8 +94,10 @@ TEST_F(Fixture, CostGradientsMatchFiniteDifferencesAndHessianIsPsd) {
     V2 gu;
     Eigen::Matrix3d hxx_unused;
     Eigen::Matrix2d huu_unused;
-    hmpc::central_difference_gradient_hessian([&](const V3& xp) { return problem.running_cost(xp, u, k); }, x, gx, hxx_unused);
-    hmpc::central_difference_gradient_hessian([&](const V2& up) { return problem.running_cost(x, up, k); }, u, gu, huu_unused);
+    hmpc::central_difference_gradient_hessian(
+        [&](const V3& xp) { return problem.running_cost(xp, u, k); }, x, gx, hxx_unused);
+    hmpc::central_difference_gradient_hessian(
+        [&](const V2& up) { return problem.running_cost(x, up, k); }, u, gu, huu_unused);
     EXPECT_LT((d.lx - gx).norm(), 1e-4 * (1 + gx.norm()));
     EXPECT_LT((d.lu - gu).norm(), 1e-4 * (1 + gu.norm()));
     // Gauss-Newton Hessian of the torque term: positive semi-definite by construction.
@@ -100,7 +109,8 @@ TEST_F(Fixture, CostGradientsMatchFiniteDifferencesAndHessianIsPsd) {
     ForearmProblem<double>::TerminalDerivatives t;
     problem.terminal_cost_derivatives(x, 10, t);
     V3 gt;
-    hmpc::central_difference_gradient_hessian([&](const V3& xp) { return problem.terminal_cost(xp, 10); }, x, gt, hxx_unused);
+    hmpc::central_difference_gradient_hessian(
+        [&](const V3& xp) { return problem.terminal_cost(xp, 10); }, x, gt, hxx_unused);
     EXPECT_LT((t.lx - gt).norm(), 1e-4 * (1 + gt.norm()));
     EXPECT_LT((t.lxx - hxx_unused).norm(), 1e-2 * (1 + t.lxx.norm()));  // exact without torque
   }
@@ -168,15 +178,18 @@ TEST_F(Fixture, FastSubsystemDerivativesMatchFiniteDifferences) {
     Fast::StateJacobian fx, fx_fd;
     Fast::ControlJacobian fu, fu_fd;
     fast.dynamics_derivatives(zeta, nu, j, fx, fu);
-    hmpc::central_difference_jacobian([&](const Fast::State& z) { return fast.dynamics(z, nu, j); }, zeta, fx_fd);
-    hmpc::central_difference_jacobian([&](const Fast::Control& n) { return fast.dynamics(zeta, n, j); }, nu, fu_fd);
+    hmpc::central_difference_jacobian([&](const Fast::State& z) { return fast.dynamics(z, nu, j); },
+                                      zeta, fx_fd);
+    hmpc::central_difference_jacobian(
+        [&](const Fast::Control& n) { return fast.dynamics(zeta, n, j); }, nu, fu_fd);
     EXPECT_LT((fx - fx_fd).norm(), 1e-7);
     EXPECT_LT((fu - fu_fd).norm(), 1e-7);
     Fast::RunningDerivatives d;
     fast.running_cost_derivatives(zeta, nu, j, d);
     Eigen::Vector2d g;
     Eigen::Matrix2d unused;
-    hmpc::central_difference_gradient_hessian([&](const Fast::State& z) { return fast.running_cost(z, nu, j); }, zeta, g, unused);
+    hmpc::central_difference_gradient_hessian(
+        [&](const Fast::State& z) { return fast.running_cost(z, nu, j); }, zeta, g, unused);
     EXPECT_LT((d.lx - g).norm(), 1e-4 * (1 + g.norm()));
   }
   // The composed motor input stays in -5..5 V through the bounds on nu.

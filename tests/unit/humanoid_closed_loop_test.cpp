@@ -88,7 +88,8 @@ TEST(HumanoidPhysicalChecks, JumpNeedsAFlightAndAnUprightLanding) {
   ClosedLoopRun run;
   for (int k = 1; k <= 100; ++k) {
     const bool flying = k == 30 || k == 31;
-    run.samples.push_back(sample(0.03 * k, flying ? 1.1 : 0.85, flying ? 0.0 : 230.0, flying ? 0.0 : 230.0));
+    run.samples.push_back(
+        sample(0.03 * k, flying ? 1.1 : 0.85, flying ? 0.0 : 230.0, flying ? 0.0 : 230.0));
   }
   EXPECT_TRUE(check_motion("V", m, run).passed) << check_motion("V", m, run).verdict;
   EXPECT_DOUBLE_EQ(apex_height(run), 1.1);
@@ -107,7 +108,8 @@ TEST(HumanoidPhysicalChecks, WalkingNeedsSpeedAndAlternatingSteps) {
     const double t = 0.03 * k;
     // Feet in turn: a foot off the ground for 3 samples in every 10, the other loaded.
     const int phase = k % 10;
-    ClosedLoopSample s = sample(t, 0.85, phase < 3 ? 0.0 : 230.0, phase >= 5 && phase < 8 ? 0.0 : 230.0);
+    ClosedLoopSample s =
+        sample(t, 0.85, phase < 3 ? 0.0 : 230.0, phase >= 5 && phase < 8 ? 0.0 : 230.0);
     s.base.position.x() = speed * t;
     run.samples.push_back(s);
   }
@@ -142,8 +144,9 @@ TEST(HumanoidClosedLoop, CoarseFastCostsWithinTenPercentOfFineOnStanding) {
   const double fine = cost[static_cast<int>(MpcKind::kFine)];
   const double coarse = cost[static_cast<int>(MpcKind::kCoarse)];
   const double coarse_fast = cost[static_cast<int>(MpcKind::kCoarseFast)];
-  std::printf("motion I cost: Fine %.3f, Coarse %.3f (%.4f x Fine), Coarse-Fast %.3f (%.4f x Fine)\n",
-              fine, coarse, coarse / fine, coarse_fast, coarse_fast / fine);
+  std::printf(
+      "motion I cost: Fine %.3f, Coarse %.3f (%.4f x Fine), Coarse-Fast %.3f (%.4f x Fine)\n", fine,
+      coarse, coarse / fine, coarse_fast, coarse_fast / fine);
   EXPECT_LT(coarse_fast, 1.1 * fine);
 }
 
@@ -164,7 +167,8 @@ TEST(HumanoidClosedLoop, CoarseFastUpdateDoesNotAllocate) {
   for (int k = 0; k < 10; ++k) {
     mpc->upper_problem().set_start_time(k * kSamplingPeriod);
     mpc->update(to_vector(x));
-    for (int j = 0; j < kFineStepsPerCoarseStep; ++j) x = simulator.step(x, mpc->planned_control(j), kFastStep);
+    for (int j = 0; j < kFineStepsPerCoarseStep; ++j)
+      x = simulator.step(x, mpc->planned_control(j), kFastStep);
   }
   heap_monitor::disarm();
   EXPECT_EQ(heap_monitor::allocations() - before, 0u);
@@ -216,7 +220,8 @@ TEST(HumanoidClosedLoop, ANudgedStartMovesTheRobot) {
   EXPECT_NEAR(r.initial.v[4], -0.1, 1e-12) << "upright at the start: torso axes are the world's";
   EXPECT_TRUE(r.initial.v.head<3>().isZero() && r.initial.v.tail<8>().isZero());
   ASSERT_EQ(r.samples.size(), 2u);
-  EXPECT_LT(r.samples[0].base.position.y(), r.initial.q[1] - 0.001) << "moved right (-y) by a millimetre or more";
+  EXPECT_LT(r.samples[0].base.position.y(), r.initial.q[1] - 0.001)
+      << "moved right (-y) by a millimetre or more";
 }
 
 TEST(HumanoidClosedLoop, MpcKindNamesRoundTrip) {

@@ -20,8 +20,8 @@ namespace {
 
 using namespace hmpc::humanoid;
 
-constexpr double kDt = 1e-3;          // the simulator and HIL step (thesis Sec. 2.7)
-constexpr int kSteps = 1000;          // 1 s: 5 periods of the 5 Hz whole-body bounce (contact.hpp)
+constexpr double kDt = 1e-3;  // the simulator and HIL step (thesis Sec. 2.7)
+constexpr int kSteps = 1000;  // 1 s: 5 periods of the 5 Hz whole-body bounce (contact.hpp)
 constexpr double kStandingHeight = 0.85;  // [m], Table 2.2
 
 // The torques both simulators get (as humanoid_contact_test's controller): the static joint
@@ -46,8 +46,8 @@ class Controller {
     pitch_ = pitch(start);
   }
   JointVector operator()(const State& x) const {
-    JointVector tau = feedforward_ + kp * (target_ - x.q.tail<kJoints>()) -
-                      kd_.cwiseProduct(x.v.tail<kJoints>());
+    JointVector tau =
+        feedforward_ + kp * (target_ - x.q.tail<kJoints>()) - kd_.cwiseProduct(x.v.tail<kJoints>());
     for (int leg = 0; leg < 2; ++leg) {
       tau[leg * kJointsPerLeg + kAnkle] += k_pitch * (pitch_ - pitch(x)) - d_pitch * x.v[1];
     }
@@ -90,9 +90,10 @@ Figures figures(StepMap& probe, const State& x, const std::array<Vector3, kSoleP
 }
 
 void print(const char* who, double t, const Figures& f) {
-  std::printf("%-7s t %.2f s: load %7.2f N (left %6.2f, right %6.2f), sink %.2f mm, "
-              "base z %.4f m, slide %.2f mm, base speed %.1e m/s\n",
-              who, t, f.total, f.left, f.right, 1e3 * f.sink, f.base_z, 1e3 * f.slide, f.base_speed);
+  std::printf(
+      "%-7s t %.2f s: load %7.2f N (left %6.2f, right %6.2f), sink %.2f mm, "
+      "base z %.4f m, slide %.2f mm, base speed %.1e m/s\n",
+      who, t, f.total, f.left, f.right, 1e3 * f.sink, f.base_z, 1e3 * f.slide, f.base_speed);
 }
 
 // Both simulators from `start` for 1 s under the controller holding `pose`; the figures at the

@@ -4,7 +4,6 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -120,8 +119,8 @@ TEST(HumanoidContact, JacobianMatchesBodyVelocities) {
   map.dynamics().kinematics(x.q, x.v, kin);
   const Vector3 local(0.03, -0.02, -0.1);
   for (int body = 0; body < kBodies; ++body) {
-    const Vector3 expected =
-        kin.rotation[body] * (kin.velocity[body].tail<3>() + kin.velocity[body].head<3>().cross(local));
+    const Vector3 expected = kin.rotation[body] * (kin.velocity[body].tail<3>() +
+                                                   kin.velocity[body].head<3>().cross(local));
     const Vector3 actual = point_jacobian(map.dynamics().model(), kin, body, local) * x.v;
     EXPECT_LT((actual - expected).norm(), 1e-12 * (1.0 + expected.norm())) << "body " << body;
   }
@@ -198,18 +197,21 @@ Slide slide(double push_over_limit, int steps) {
     map.dynamics().kinematics(x.q, x.v, kin);
     Velocity external = Velocity::Zero();
     for (int leg = 0; leg < 2; ++leg) {
-      external += point_jacobian(model, kin, Model::body_of(leg, kAnkle), Vector3::Zero()).transpose() *
-                  force_per_leg;
+      external +=
+          point_jacobian(model, kin, Model::body_of(leg, kAnkle), Vector3::Zero()).transpose() *
+          force_per_leg;
     }
     x = map.step(x, control(x), kDt, external);
   }
   EXPECT_TRUE(finite(x));
   const ContactState& c = map.evaluate_contact(x);
-  Slide result{c.position[0].x() - start, 0.0, vertical_load(c).sole, c.velocity[0].x(), weight(map)};
+  Slide result{c.position[0].x() - start, 0.0, vertical_load(c).sole, c.velocity[0].x(),
+               weight(map)};
   for (int i = 0; i < kSolePoints; ++i) result.friction -= c.force[i].x();
-  std::printf("push %.1f mu m g for %d ms: heel slip %.4f m at %.3f m/s, friction %.1f N on %.1f N\n",
-              push_over_limit, steps, result.distance, result.heel_speed, result.friction,
-              result.sole_load);
+  std::printf(
+      "push %.1f mu m g for %d ms: heel slip %.4f m at %.3f m/s, friction %.1f N on %.1f N\n",
+      push_over_limit, steps, result.distance, result.heel_speed, result.friction,
+      result.sole_load);
   return result;
 }
 
@@ -236,9 +238,9 @@ TEST(HumanoidContact, SlidesAboveLimit) {
 TEST(HumanoidContact, MotionsMirrorInTheSagittalPlane) {
   StepMap map;
   State a = standing(map).x;
-  a.v[4] = 0.3;                      // the whole robot moving left
-  a.v[0] = 0.2;                      // and rolling
-  a.q[7 + kHipAbduction] = 0.1;      // left leg abducted
+  a.v[4] = 0.3;                  // the whole robot moving left
+  a.v[0] = 0.2;                  // and rolling
+  a.q[7 + kHipAbduction] = 0.1;  // left leg abducted
   a.q[7 + kJointsPerLeg + kKnee] = 0.3;
   JointVector tau;
   tau << 20.0, -10.0, 30.0, 5.0, -15.0, 25.0, -20.0, 8.0;

@@ -88,10 +88,13 @@ struct FullModel {
     linearised->dynamics_derivatives(to_vector(x), tau, 0, fx, fu);
     if (refined) {
       refined_difference(
-          [&](const StateVector& xp) { return to_vector(map->step(to_state(xp), tau, config.step)); },
+          [&](const StateVector& xp) {
+            return to_vector(map->step(to_state(xp), tau, config.step));
+          },
           to_vector(x), fx_reference);
-      refined_difference([&](const JointVector& up) { return to_vector(map->step(x, up, config.step)); },
-                         tau, fu_reference);
+      refined_difference(
+          [&](const JointVector& up) { return to_vector(map->step(x, up, config.step)); }, tau,
+          fu_reference);
     } else {
       reference->dynamics_derivatives(to_vector(x), tau, 0, fx_reference, fu_reference);
     }
@@ -185,7 +188,8 @@ TEST(HumanoidDerivatives, JointsAtTheirStopsMatchTheRefinedReference) {
   double stop_torque = 0.0;
   for (int j = 0; j < kJoints; ++j) {
     stop_torque += std::abs(joint_stop(x.q[7 + j], x.v[kBaseDofs + j], limits.joint_lower[j],
-                                       limits.joint_upper[j], Parameters{}).torque);
+                                       limits.joint_upper[j], Parameters{})
+                                .torque);
   }
   ASSERT_GT(stop_torque, 100.0);  // the stops are engaged
   const auto [fx, fu] = model.errors(x, tau, true);
@@ -257,7 +261,8 @@ TEST(HumanoidDerivatives, LinearisedStepIsTheStep) {
     const State x = random_state(rng, 0.0);
     const JointVector tau = random_torques(rng);
     EXPECT_EQ(to_vector(map.linearise(x, tau, 0.03, fx, fu)), to_vector(map.step(x, tau, 0.03)));
-    EXPECT_EQ(to_vector(map.linearise_joints(x, tau, 0.01, fz, fl)), to_vector(map.step_joints(x, tau, 0.01)));
+    EXPECT_EQ(to_vector(map.linearise_joints(x, tau, 0.01, fz, fl)),
+              to_vector(map.step_joints(x, tau, 0.01)));
   }
 }
 
@@ -284,7 +289,8 @@ TEST(HumanoidDerivatives, LinearisationDoesNotAllocate) {
 // swinging, half of them lifted off the ground), the next state step()'s, and no allocation.
 TEST(HumanoidDerivatives, ArmVariantMatchesTheRefinedReference) {
   const ProblemConfig config;
-  ArmStepMap map(ArmModel(config.parameters), config.parameters, config.contact, config.max_substep);
+  ArmStepMap map(ArmModel(config.parameters), config.parameters, config.contact,
+                 config.max_substep);
   using ArmState = ArmStepMap::State;
   using ArmVector = ArmStepMap::StateVector;
   using ArmTorques = ArmStepMap::JointVector;
@@ -309,12 +315,16 @@ TEST(HumanoidDerivatives, ArmVariantMatchesTheRefinedReference) {
     heap_monitor::disarm();
     EXPECT_EQ(heap_monitor::allocations() - before, 0u);
     EXPECT_EQ(vector_of(next), vector_of(map.step(x, tau, config.step)));
-    refined_difference([&](const ArmVector& xp) { return vector_of(map.step(state_of(xp), tau, config.step)); },
-                       vector_of(x), fx_reference);
-    refined_difference([&](const ArmTorques& up) { return vector_of(map.step(x, up, config.step)); }, tau,
-                       fu_reference);
-    const double fx_error = worst_column_error(fx, fx_reference), fu_error = worst_column_error(fu, fu_reference);
-    std::printf("arm variant, random state %d: worst column error fx %.1e, fu %.1e\n", trial, fx_error, fu_error);
+    refined_difference(
+        [&](const ArmVector& xp) { return vector_of(map.step(state_of(xp), tau, config.step)); },
+        vector_of(x), fx_reference);
+    refined_difference(
+        [&](const ArmTorques& up) { return vector_of(map.step(x, up, config.step)); }, tau,
+        fu_reference);
+    const double fx_error = worst_column_error(fx, fx_reference),
+                 fu_error = worst_column_error(fu, fu_reference);
+    std::printf("arm variant, random state %d: worst column error fx %.1e, fu %.1e\n", trial,
+                fx_error, fu_error);
     EXPECT_LT(fx_error, kRefinedTolerance) << "trial " << trial;
     EXPECT_LT(fu_error, kRefinedTolerance) << "trial " << trial;
   }

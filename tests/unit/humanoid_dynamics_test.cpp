@@ -1,8 +1,8 @@
 // Our humanoid dynamics (CRBA, RNEA, Cholesky forward dynamics) against the same model built in
 // Simbody, for random states: mass matrix, bias forces and contact-free accelerations agree to
-// 1e-9 relative, for the biped (n = 29) and the reaching robot with its arm (n = 31). Also: M is symmetric positive definite, 0.5 v^T M v equals the links' summed
-// kinetic energy, the model weighs 47.0 kg and stands 1.59 m tall (thesis Sec. 2.5.1), and no
-// dynamics call allocates.
+// 1e-9 relative, for the biped (n = 29) and the reaching robot with its arm (n = 31). Also: M is
+// symmetric positive definite, 0.5 v^T M v equals the links' summed kinetic energy, the model
+// weighs 47.0 kg and stands 1.59 m tall (thesis Sec. 2.5.1), and no dynamics call allocates.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -51,8 +51,8 @@ RandomState<A> random_state(const BasicModel<A>& model, std::mt19937& rng) {
     const double t = 0.5 * (unit(rng) + 1.0);
     s.q[7 + j] = model.joint_lower[j] + t * (model.joint_upper[j] - model.joint_lower[j]);
   }
-  for (int k = 0; k < 3; ++k) s.v[k] = 3.0 * unit(rng);      // rad/s
-  for (int k = 3; k < 6; ++k) s.v[k] = 2.0 * unit(rng);      // m/s
+  for (int k = 0; k < 3; ++k) s.v[k] = 3.0 * unit(rng);  // rad/s
+  for (int k = 3; k < 6; ++k) s.v[k] = 2.0 * unit(rng);  // m/s
   for (int j = 0; j < kJoints; ++j) s.v[kBaseDofs + j] = 8.0 * unit(rng);
   for (int k = 0; k < kBaseDofs; ++k) s.tau[k] = 50.0 * unit(rng);
   for (int j = 0; j < kJoints; ++j) s.tau[kBaseDofs + j] = model.torque_limit[j] * unit(rng);
@@ -93,10 +93,11 @@ TYPED_TEST(HumanoidVariants, AgreesWithSimbody) {
     simbody.set_state(s.q, s.v);
     const BasicMassMatrix<A> M = dynamics.mass_matrix(s.q);
     worst_mass = std::max(worst_mass, relative_error(M, simbody.mass_matrix()));
-    worst_bias = std::max(worst_bias, relative_error(dynamics.bias_forces(s.q, s.v), simbody.bias_forces()));
-    worst_acceleration = std::max(
-        worst_acceleration,
-        relative_error(dynamics.forward_dynamics(s.q, s.v, s.tau), simbody.forward_dynamics(s.tau)));
+    worst_bias =
+        std::max(worst_bias, relative_error(dynamics.bias_forces(s.q, s.v), simbody.bias_forces()));
+    worst_acceleration =
+        std::max(worst_acceleration, relative_error(dynamics.forward_dynamics(s.q, s.v, s.tau),
+                                                    simbody.forward_dynamics(s.tau)));
   }
   std::printf("n = %d: max relative error vs Simbody over %d states: M %.2e, c %.2e, a %.2e\n",
               Dimensions<A>::kStateSize, kRandomStates, worst_mass, worst_bias, worst_acceleration);
@@ -140,8 +141,10 @@ TEST(HumanoidArmModel, IsTheBipedsRightArmOnItsOwnJoint) {
   q[3] = 1.0;
   ArmDynamics arm_dynamics(robot);
   Dynamics dynamics(biped);
-  const Eigen::Matrix<double, 6, 6> whole_body = dynamics.mass_matrix(q.head<kConfigurationSize>()).topLeftCorner<6, 6>();
-  EXPECT_LE((arm_dynamics.mass_matrix(q).topLeftCorner<6, 6>() - whole_body).norm(), 1e-12 * whole_body.norm());
+  const Eigen::Matrix<double, 6, 6> whole_body =
+      dynamics.mass_matrix(q.head<kConfigurationSize>()).topLeftCorner<6, 6>();
+  EXPECT_LE((arm_dynamics.mass_matrix(q).topLeftCorner<6, 6>() - whole_body).norm(),
+            1e-12 * whole_body.norm());
 
   const Parameters p;
   const double scale = p.stature / p.reference_stature;

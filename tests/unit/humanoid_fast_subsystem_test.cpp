@@ -34,7 +34,8 @@ JointVector some_torques() {
 
 TEST(HumanoidFastSubsystem, EpsilonIsSmall) {
   StepMap map;
-  const double epsilon = perturbation_parameter(map.dynamics().mass_matrix(standing_state(ProblemConfig{}, 0.85).q));
+  const double epsilon =
+      perturbation_parameter(map.dynamics().mass_matrix(standing_state(ProblemConfig{}, 0.85).q));
   std::printf("epsilon at the standing posture: %.3f\n", epsilon);
   EXPECT_GT(epsilon, 0.0);
   EXPECT_LT(epsilon, 0.5);  // M_leg a perturbation of M_base (Sec. 2.5.2)
@@ -68,7 +69,8 @@ TEST(HumanoidFastSubsystem, LegRowsAreTheFullModelsWithTheBaseHeld) {
   }
   EXPECT_GT((applied - tau).norm(), 1e-4);  // the state touches a stop: the test sees them
   EXPECT_LT((generalized.tail<kJoints>() - applied).norm(), 1e-6 * tau.norm());
-  EXPECT_LT((next.q.tail<kJoints>() - (x.q.tail<kJoints>() + h * next.v.tail<kJoints>())).norm(), 1e-15);
+  EXPECT_LT((next.q.tail<kJoints>() - (x.q.tail<kJoints>() + h * next.v.tail<kJoints>())).norm(),
+            1e-15);
 }
 
 TEST(HumanoidFastSubsystem, ReducesToTheFullModelToFirstOrderInEpsilon) {
@@ -124,7 +126,8 @@ TEST(HumanoidFastSubsystem, FollowsTheHeldReference) {
   using Zeta = FastSubsystem<kSteps>::State;
   using Nu = FastSubsystem<kSteps>::Control;
   EXPECT_EQ(fast.deviation(to_vector(standing_state(config, 0.85))), Zeta::Zero());
-  for (int j = 0; j < kSteps; ++j) EXPECT_EQ(fast.dynamics(Zeta::Zero(), Nu::Zero(), j), Zeta::Zero());
+  for (int j = 0; j < kSteps; ++j)
+    EXPECT_EQ(fast.dynamics(Zeta::Zero(), Nu::Zero(), j), Zeta::Zero());
   // A deviation nu moves zeta away; the composed input is u_hat + nu (Eq. 2.36), bounded.
   Nu nu = Nu::Zero();
   nu[2] = 5.0;

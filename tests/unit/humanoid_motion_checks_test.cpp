@@ -37,26 +37,21 @@ TEST(HumanoidMotionChecks, CoarseFastSitsOnTheChairAndStandsUp) {
 
 // Motion II: mean forward speed from 0.5 s on at least 80 % of the 1.2 m/s target, with at
 // least four touchdowns, alternating.
-TEST(HumanoidMotionChecks, CoarseFastWalks) {
-  expect_check_passes("II-walking");
-}
+TEST(HumanoidMotionChecks, CoarseFastWalks) { expect_check_passes("II-walking"); }
 
 // Motion III: motion II's checks at III's 2 m/s, and flight phases: at least 3 samples (90 ms)
 // with both feet unloaded.
-TEST(HumanoidMotionChecks, CoarseFastRuns) {
-  expect_check_passes("III-running");
-}
+TEST(HumanoidMotionChecks, CoarseFastRuns) { expect_check_passes("III-running"); }
 
 // Motion V: a flight phase with both feet unloaded for at least 60 ms, then the last 0.3 s on
 // its feet, upright, in the standing band.
-TEST(HumanoidMotionChecks, CoarseFastJumpsAndLandsUpright) {
-  expect_check_passes("V-low-jump");
-}
+TEST(HumanoidMotionChecks, CoarseFastJumpsAndLandsUpright) { expect_check_passes("V-low-jump"); }
 
 // Motion VII: motion V's checks, and higher than V (apex of the base point).
 TEST(HumanoidMotionChecks, CoarseFastJumpsHigherThanTheLowJump) {
   const double high = apex_height(expect_check_passes("VII-high-jump"));
-  const double low = apex_height(run(motion("V-low-jump"), MpcKind::kCoarseFast, motion("V-low-jump").duration));
+  const double low =
+      apex_height(run(motion("V-low-jump"), MpcKind::kCoarseFast, motion("V-low-jump").duration));
   std::printf("apex: VII %.3f m, V %.3f m\n", high, low);
   EXPECT_GT(high, low);
 }

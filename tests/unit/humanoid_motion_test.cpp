@@ -5,10 +5,10 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <initializer_list>
-#include <stdexcept>
-#include <utility>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hmpc/humanoid/motion.hpp"
@@ -146,7 +146,8 @@ Motion written_and_read(const Motion& m) {
 }
 
 TEST(HumanoidMotion, WrittenMotionsReadBackExactly) {
-  for (const char* name : {"II-walking", "IV-sitting", "V-low-jump", "VIII-double-flip", "reaching", "squatting"}) {
+  for (const char* name :
+       {"II-walking", "IV-sitting", "V-low-jump", "VIII-double-flip", "reaching", "squatting"}) {
     SCOPED_TRACE(name);
     const Motion m = load_motion(motion_path(name));
     expect_same_motion(m, written_and_read(m));
@@ -179,7 +180,8 @@ TEST(HumanoidMotion, RejectsMoreThanMaxPhases) {
     parse_motion(file, "long.motion");
     FAIL() << "accepted " << kMaxPhases + 1 << " phases";
   } catch (const MotionFileError& e) {
-    EXPECT_NE(std::string(e.what()).find("more than " + std::to_string(kMaxPhases) + " phases"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("more than " + std::to_string(kMaxPhases) + " phases"),
+              std::string::npos)
         << e.what();
   }
 }
@@ -193,8 +195,10 @@ TEST(HumanoidMotion, AttitudeQuaternionMatchesEulerComposition) {
   EXPECT_NEAR((q - Eigen::Vector4d(expected.w(), expected.x(), expected.y(), expected.z())).norm(),
               0.0, 1e-14);
   // One full flip is the quaternion -1, two are +1: Eq. 4.25 counts turns modulo two.
-  EXPECT_NEAR((attitude_quaternion({0, 2 * M_PI, 0}) - Eigen::Vector4d(-1, 0, 0, 0)).norm(), 0, 1e-15);
-  EXPECT_NEAR((attitude_quaternion({0, 4 * M_PI, 0}) - Eigen::Vector4d(1, 0, 0, 0)).norm(), 0, 1e-15);
+  EXPECT_NEAR((attitude_quaternion({0, 2 * M_PI, 0}) - Eigen::Vector4d(-1, 0, 0, 0)).norm(), 0,
+              1e-15);
+  EXPECT_NEAR((attitude_quaternion({0, 4 * M_PI, 0}) - Eigen::Vector4d(1, 0, 0, 0)).norm(), 0,
+              1e-15);
 }
 
 // A valid file, edited per case below.
@@ -297,10 +301,13 @@ TEST(HumanoidMotion, ReadsTheReachSection) {
            {replace(kReach, "w_SFE = 1e-3\n", ""), "w_SFE: missing key in [reach]"},
            {replace(kReach, "start = 0.8", "start = -1"), "start: must be >= 0"},
            {replace(kReach, "w_reach = 1e4", "w_reach = -1"), "w_reach: a weight must be >= 0"},
-           {replace(kReach, "target = 0.7 -0.12 0.7", "target = 0.7 -0.12"), "target: expected 3 numbers"},
-           {kReach + "[reach]\ntarget = 0 0 0\nstart = 0\nw_reach = 1\nw_SFE = 1\n", "section [reach] repeated"}}) {
+           {replace(kReach, "target = 0.7 -0.12 0.7", "target = 0.7 -0.12"),
+            "target: expected 3 numbers"},
+           {kReach + "[reach]\ntarget = 0 0 0\nstart = 0\nw_reach = 1\nw_SFE = 1\n",
+            "section [reach] repeated"}}) {
     const std::string message = error_of(text);
-    EXPECT_NE(message.find(expected), std::string::npos) << "got '" << message << "', expected '" << expected << "'";
+    EXPECT_NE(message.find(expected), std::string::npos)
+        << "got '" << message << "', expected '" << expected << "'";
   }
 }
 
@@ -308,8 +315,10 @@ TEST(HumanoidMotion, ReadsTheReachSection) {
 // error, not a cost without its hand term.
 TEST(HumanoidMotion, ReachingAndTheRobotMustMatch) {
   const ProblemConfig config;
-  EXPECT_THROW(StateCost(parse(kReach), standing_state(config, 0.85), config), std::invalid_argument);
-  EXPECT_THROW(BasicStateCost<1>(parse(kValid), standing_state<1>(config, 0.85), config), std::invalid_argument);
+  EXPECT_THROW(StateCost(parse(kReach), standing_state(config, 0.85), config),
+               std::invalid_argument);
+  EXPECT_THROW(BasicStateCost<1>(parse(kValid), standing_state<1>(config, 0.85), config),
+               std::invalid_argument);
   EXPECT_NO_THROW(BasicStateCost<1>(parse(kReach), standing_state<1>(config, 0.85), config));
 }
 
@@ -358,30 +367,43 @@ TEST(HumanoidMotion, RejectsBadFilesNamingFileLineAndKey) {
       {"missing key", replace(kValid, "w_beta = 1\n", ""), "test.motion:7: w_beta: missing key"},
       {"negative weight", replace(kValid, "w_height = 1", "w_height = -2"),
        "test.motion:16: w_height: a weight must be >= 0"},
-      {"nan weight", replace(kValid, "w_alpha = 1", "w_alpha = nan"), "test.motion:20: w_alpha: not finite"},
-      {"infinite weight", replace(kValid, "w_q2 = 1", "w_q2 = inf"), "test.motion:13: w_q2: not finite"},
+      {"nan weight", replace(kValid, "w_alpha = 1", "w_alpha = nan"),
+       "test.motion:20: w_alpha: not finite"},
+      {"infinite weight", replace(kValid, "w_q2 = 1", "w_q2 = inf"),
+       "test.motion:13: w_q2: not finite"},
       {"phases out of order", replace(kValid, "start = 0.5", "start = 0"),
        "test.motion:34: start: phases out of order"},
       {"first phase late", replace(kValid, "start = 0\n", "start = 0.1\n"),
        "test.motion:29: start: the first phase must start at 0"},
-      {"duplicate key", replace(kValid, "w_KFE = 1", "w_HFE = 2"), "test.motion:10: w_HFE: duplicate key"},
-      {"garbage number", replace(kValid, "height = 0.85", "height = 0.8x"), "test.motion:31: height: not a number"},
+      {"duplicate key", replace(kValid, "w_KFE = 1", "w_HFE = 2"),
+       "test.motion:10: w_HFE: duplicate key"},
+      {"garbage number", replace(kValid, "height = 0.85", "height = 0.8x"),
+       "test.motion:31: height: not a number"},
       {"wrong count", replace(kValid, "velocity = 1 0 0", "velocity = 1 0"),
        "test.motion:37: velocity: expected 3 numbers"},
-      {"missing value", replace(kValid, "duration = 1.0", "duration ="), "test.motion:4: duration: missing value"},
-      {"zero duration", replace(kValid, "duration = 1.0", "duration = 0"), "test.motion:4: duration: must be > 0"},
-      {"bad chair", replace(kValid, "chair = none", "chair = 0.5 0.2 0.1"), "test.motion:5: chair: expected"},
-      {"bad gait", replace(kValid, "gait = none", "gait = 0.6 0.05 1.5"), "test.motion:6: gait: expected"},
-      {"short gait", replace(kValid, "gait = none", "gait = 0.6 0.05"), "test.motion:6: gait: expected 3 numbers"},
+      {"missing value", replace(kValid, "duration = 1.0", "duration ="),
+       "test.motion:4: duration: missing value"},
+      {"zero duration", replace(kValid, "duration = 1.0", "duration = 0"),
+       "test.motion:4: duration: must be > 0"},
+      {"bad chair", replace(kValid, "chair = none", "chair = 0.5 0.2 0.1"),
+       "test.motion:5: chair: expected"},
+      {"bad gait", replace(kValid, "gait = none", "gait = 0.6 0.05 1.5"),
+       "test.motion:6: gait: expected"},
+      {"short gait", replace(kValid, "gait = none", "gait = 0.6 0.05"),
+       "test.motion:6: gait: expected 3 numbers"},
       {"zero model sub-step", replace(kValid, "gait = none", "gait = none\nmodel_substep = 0"),
        "test.motion:7: model_substep: must be > 0 s and at most 0.01 s"},
-      {"unstable model sub-step", replace(kValid, "gait = none", "gait = none\nmodel_substep = 0.02"),
+      {"unstable model sub-step",
+       replace(kValid, "gait = none", "gait = none\nmodel_substep = 0.02"),
        "test.motion:7: model_substep: must be > 0 s and at most 0.01 s"},
       {"bad version", replace(kValid, "hmpc-humanoid-motion 1", "hmpc-humanoid-motion 2"),
        "test.motion:2: expected the version line"},
-      {"unknown section", replace(kValid, "[weights]", "[weight]"), "test.motion:7: unknown section [weight]"},
-      {"no phase", kValid.substr(0, kValid.find("[phase]")), "test.motion: missing section [phase]"},
-      {"setting outside a section", replace(kValid, "[motion]\n", ""), "test.motion:3: duration: setting outside"},
+      {"unknown section", replace(kValid, "[weights]", "[weight]"),
+       "test.motion:7: unknown section [weight]"},
+      {"no phase", kValid.substr(0, kValid.find("[phase]")),
+       "test.motion: missing section [phase]"},
+      {"setting outside a section", replace(kValid, "[motion]\n", ""),
+       "test.motion:3: duration: setting outside"},
   };
   for (const BadCase& c : cases) {
     const std::string message = error_of(c.text);

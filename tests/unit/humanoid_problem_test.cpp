@@ -86,8 +86,8 @@ TEST(HumanoidProblem, EachCostTermFollowsItsEquation) {
   m.weights = CostWeights{};
   m.weights.angular_velocity << 1.0, 0.0, 0.0;
   x.v.head<3>() << 0.2, 0.0, 0.0;  // body x, which the yaw turns off world x
-  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0),
-              std::pow(0.2 * std::cos(0.3), 2), 1e-14);
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), std::pow(0.2 * std::cos(0.3), 2),
+              1e-14);
 }
 
 TEST(HumanoidProblem, LegAngleTermsFollowTheirEquations) {
@@ -115,7 +115,8 @@ TEST(HumanoidProblem, LegAngleTermsFollowTheirEquations) {
   x.q[right_hip] = 0.2;
   f = cost.features(x);
   EXPECT_NEAR(f.alpha_right, -f.alpha_left, 1e-12);
-  EXPECT_NEAR(cost.residual(to_vector(x), 0.0)[8], std::sqrt(2.0) * (f.alpha_right - f.alpha_left), 1e-15);
+  EXPECT_NEAR(cost.residual(to_vector(x), 0.0)[8], std::sqrt(2.0) * (f.alpha_right - f.alpha_left),
+              1e-15);
   EXPECT_GT(std::abs(f.alpha_right - f.alpha_left), 0.3);
 
   // Eq. 4.29: abducting the left hip moves beta_L only.
@@ -145,8 +146,10 @@ TEST(HumanoidProblem, FootHeightTermFollowsTheGait) {
     EXPECT_NEAR(down.residual(to_vector(x0), 0.1)[14 + k], 2.0 * -sink, 1e-9);
   }
   const BaseFeatures lifted_features = down.features(lifted);
-  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[14], 2.0 * lifted_features.sole_height[0], 1e-12);
-  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[15], 2.0 * lifted_features.sole_height[1], 1e-12);
+  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[14], 2.0 * lifted_features.sole_height[0],
+              1e-12);
+  EXPECT_NEAR(down.residual(to_vector(lifted), 0.1)[15], 2.0 * lifted_features.sole_height[1],
+              1e-12);
   // With a gait the lifted foot's target follows the swing.
   m.gait = Gait{0.6, 0.05, 0.4};
   const StateCost cost(m, x0, config);
@@ -183,7 +186,8 @@ TEST(HumanoidProblem, CostIsMirrorSymmetric) {
     EXPECT_NEAR(a, b, 1e-12 * a) << "at t = " << t;
   }
   const StateCost half_turn(test::motion("VI-half-turn-jump"), standing(), config);
-  const double a = half_turn.value(to_vector(x), 1.0), b = half_turn.value(to_vector(test::mirrored(x)), 1.0);
+  const double a = half_turn.value(to_vector(x), 1.0),
+               b = half_turn.value(to_vector(test::mirrored(x)), 1.0);
   EXPECT_GT(std::abs(a - b), 0.1 * a);
 }
 
@@ -209,8 +213,8 @@ TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) 
   walking.derivatives(x, time, walking_lx, walking_lxx);
   Eigen::Matrix<double, 1, kStateSize> walking_gradient;
   hmpc::central_difference_jacobian(
-      [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(walking.value(xp, time)); }, x,
-      walking_gradient);
+      [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(walking.value(xp, time)); },
+      x, walking_gradient);
   EXPECT_LT((walking_lx - walking_gradient.transpose()).norm(), 1e-5 * walking_gradient.norm());
   Eigen::Matrix<double, 1, kStateSize> gradient;
   hmpc::central_difference_jacobian(
@@ -240,8 +244,8 @@ TEST(HumanoidProblem, DynamicsIsTheStepMapAndTorquesAreBounded) {
   m.weights.control = {1.0, 2.0, 3.0, 4.0};
   const HumanoidProblem<3> weighted(m, x0, config);
   JointVector u = JointVector::Zero();
-  u[2] = 10.0;   // left knee
-  u[7] = -1.0;   // right ankle
+  u[2] = 10.0;  // left knee
+  u[7] = -1.0;  // right ankle
   EXPECT_NEAR(weighted.running_cost(to_vector(x0), u, 0), 3.0 * 100.0 + 4.0 * 1.0, 1e-12);
 }
 
@@ -273,7 +277,8 @@ TEST(HumanoidProblem, ParallelLinearisationIsBitIdenticalToSerial) {
     EXPECT_EQ(result.cost, reference.cost) << threads << " threads";
     for (int t = 0; t < 4; ++t) {
       EXPECT_EQ(parallel.solver->controls()[t], serial.solver->controls()[t]) << "step " << t;
-      EXPECT_EQ(parallel.solver->feedback_gains()[t], serial.solver->feedback_gains()[t]) << "step " << t;
+      EXPECT_EQ(parallel.solver->feedback_gains()[t], serial.solver->feedback_gains()[t])
+          << "step " << t;
     }
     EXPECT_EQ(parallel.solver->states()[4], serial.solver->states()[4]);
   }
@@ -314,7 +319,8 @@ TEST(HumanoidThreadPool, RunsTasksConcurrently) {
   pool.for_each(2, [&](int) {
     ++started;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (started.load() < 2 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+    while (started.load() < 2 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::yield();
     if (started.load() == 2) ++met;
   });
   EXPECT_EQ(met.load(), 2);

@@ -1,16 +1,16 @@
 // Unit tests of the iLQR core (thesis Sec. 2.2): exactness on LQR problems, convergence on a
 // nonlinear swing-up, box limits, warm start, iteration budgets and bad input.
+#include "hmpc/solver/ilqr.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
-
 #include <cmath>
 #include <limits>
 #include <random>
 
 #include "hmpc/models/singularly_perturbed_example_mpc.hpp"
 #include "hmpc/mpc/receding_horizon_mpc.hpp"
-#include "hmpc/solver/ilqr.hpp"
 
 namespace {
 
@@ -257,6 +257,8 @@ TEST(IlqrPendulum, SwingUpConvergesWithinTorqueLimit) {
 // round, run here in reverse order, as a thread pool may finish them in any order.
 class LanedPendulum : public hmpc::ProblemBase<LanedPendulum, double, 2, 1> {
  public:
+  // Hides ProblemBase's 1 on purpose: the solver reads it from the problem type.
+  // cppcheck-suppress duplInheritedMember
   static constexpr int kRolloutLanes = 3;
   int lanes = kRolloutLanes;
   mutable std::array<int, kRolloutLanes> lane_steps{};  // rollout_dynamics calls per lane
@@ -270,12 +272,16 @@ class LanedPendulum : public hmpc::ProblemBase<LanedPendulum, double, 2, 1> {
   void for_each_rollout(int count, const LaneFunction& rollout) const {
     for (int lane = count - 1; lane >= 0; --lane) rollout(lane);
   }
-  State dynamics(const State& x, const Control& u, int t) const { return pendulum.dynamics(x, u, t); }
+  State dynamics(const State& x, const Control& u, int t) const {
+    return pendulum.dynamics(x, u, t);
+  }
   void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
                             ControlJacobian& fu) const {
     pendulum.dynamics_derivatives(x, u, t, fx, fu);
   }
-  double running_cost(const State& x, const Control& u, int t) const { return pendulum.running_cost(x, u, t); }
+  double running_cost(const State& x, const Control& u, int t) const {
+    return pendulum.running_cost(x, u, t);
+  }
   double terminal_cost(const State& x, int t) const { return pendulum.terminal_cost(x, t); }
   Control control_lower_bound(int t) const { return pendulum.control_lower_bound(t); }
   Control control_upper_bound(int t) const { return pendulum.control_upper_bound(t); }
@@ -300,7 +306,8 @@ TEST(IlqrLineSearch, LanesTakeTheSameStepsAsOneAtATime) {
     EXPECT_EQ(result.status, reference.status) << lanes << " lanes";
     EXPECT_EQ(result.iterations, reference.iterations) << lanes << " lanes";
     EXPECT_EQ(result.cost, reference.cost) << lanes << " lanes";
-    for (int t = 0; t < 100; ++t) ASSERT_EQ(solver.controls()[t], serial.controls()[t]) << lanes << " lanes, step " << t;
+    for (int t = 0; t < 100; ++t)
+      ASSERT_EQ(solver.controls()[t], serial.controls()[t]) << lanes << " lanes, step " << t;
     // Every lane asked for rolled out (the swing-up backtracks), none beyond.
     for (int lane = 0; lane < LanedPendulum::kRolloutLanes; ++lane) {
       if (lane < lanes) {
@@ -347,8 +354,8 @@ TEST(IlqrBudget, StopPredicateEndsTheSolveWithTheBestPlan) {
   Pendulum problem;
   hmpc::Ilqr<Pendulum, 100> solver;
   int checks = 0;
-  const auto result = solver.solve(problem, Pendulum::State(0.0, 0.0), 1000,
-                                   [&checks] { return ++checks > 4; });
+  const auto result =
+      solver.solve(problem, Pendulum::State(0.0, 0.0), 1000, [&checks] { return ++checks > 4; });
   EXPECT_EQ(result.status, hmpc::SolveStatus::kBudgetExhausted);
   EXPECT_EQ(result.iterations, 4);
   EXPECT_LT(result.cost, result.initial_cost);
@@ -418,8 +425,8 @@ TEST(IlqrBadInput, NonFiniteInitialStateKeepsThePreviousPlan) {
   hmpc::Ilqr<Pendulum, 50> solver;
   solver.solve(problem, Pendulum::State(0.1, 0.0));
   const auto plan = solver.controls();
-  for (double bad : {std::numeric_limits<double>::quiet_NaN(),
-                     std::numeric_limits<double>::infinity()}) {
+  for (double bad :
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     const auto result = solver.solve(problem, Pendulum::State(bad, 0.0));
     EXPECT_EQ(result.status, hmpc::SolveStatus::kInvalidInput);
     EXPECT_FALSE(hmpc::plan_is_usable(result.status));

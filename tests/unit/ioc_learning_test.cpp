@@ -77,7 +77,8 @@ TEST(LocalIoc, LearnsTowardsTheWeightsOfTheRobotsOwnMpcFromItsRuns) {
   const LearnResult result = learn_and_print(ioc, truth);
   EXPECT_TRUE(result.converged) << result.stop;
   EXPECT_GT(result.log_likelihood, result.initial_log_likelihood);
-  EXPECT_GT(cosine_similarity(result.weights, truth), cosine_similarity(initial_weights(), truth) + 0.2);
+  EXPECT_GT(cosine_similarity(result.weights, truth),
+            cosine_similarity(initial_weights(), truth) + 0.2);
 }
 
 }  // namespace

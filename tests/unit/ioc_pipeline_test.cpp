@@ -19,7 +19,7 @@ using namespace hmpc::ioc;
 constexpr int kCaptures = 6;
 
 struct Task {
-  Weights hidden;   // the demonstrator's
+  Weights hidden;  // the demonstrator's
   Weights learned;
   humanoid::Motion reference;  // the demonstrated behaviour's targets, the robot task's weights
 };
@@ -31,15 +31,18 @@ double joint_excursion(const Demonstration& d) {
   double sum = 0.0;
   for (const humanoid::StateVector& x : d.states) {
     sum += (x.segment<humanoid::kLegJoints>(kJointOffset) -
-            d.states.front().segment<humanoid::kLegJoints>(kJointOffset)).squaredNorm();
+            d.states.front().segment<humanoid::kLegJoints>(kJointOffset))
+               .squaredNorm();
   }
   return std::sqrt(sum / (humanoid::kLegJoints * double(d.states.size())));
 }
 
 Task learn_task(const std::string& demonstrator, const std::string& task) {
   SCOPED_TRACE(demonstrator);
-  const humanoid::Motion human = humanoid::load_motion(std::string(HMPC_IOC_DEMONSTRATORS) + "/" + demonstrator);
-  const humanoid::Motion robot = humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + task);
+  const humanoid::Motion human =
+      humanoid::load_motion(std::string(HMPC_IOC_DEMONSTRATORS) + "/" + demonstrator);
+  const humanoid::Motion robot =
+      humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + task);
   CaptureConfig capture;
   capture.count = kCaptures;
   const std::vector<Capture> captures = capture_demonstrations(human, capture);
@@ -67,7 +70,8 @@ Task learn_task(const std::string& demonstrator, const std::string& task) {
 // RMS of log(w / hidden) over the torque weights, up to a common scale (IOC's weights have
 // none): 0 when the proportions are the hidden ones.
 double torque_proportion_error(const Weights& w, const Weights& hidden) {
-  const Eigen::Array4d log_ratio = (w.head<kControlWeights>().array() / hidden.head<kControlWeights>().array()).log();
+  const Eigen::Array4d log_ratio =
+      (w.head<kControlWeights>().array() / hidden.head<kControlWeights>().array()).log();
   return std::sqrt((log_ratio - log_ratio.mean()).square().mean());
 }
 
@@ -86,10 +90,12 @@ void expect_learned_beats_initial(const Task& task) {
   // jumping 0.33 against the initial weights' 0.59, squatting 0.07 against 0.26). The state
   // weights come out 2-100 times too small relative to them (local IOC reads a demonstration's
   // distance from a local optimum as weaker state costs); not asserted.
-  EXPECT_LT(torque_proportion_error(task.learned, task.hidden), torque_proportion_error(initial_weights(), task.hidden));
+  EXPECT_LT(torque_proportion_error(task.learned, task.hidden),
+            torque_proportion_error(initial_weights(), task.hidden));
   // Figs. 4.4-4.5: the motion generated with the learned weights is nearer the demonstrated
   // one than with the initial weights (with which the robot falls).
-  const MotionErrors initial = generate(task, initial_weights()), learned = generate(task, task.learned);
+  const MotionErrors initial = generate(task, initial_weights()),
+                     learned = generate(task, task.learned);
   EXPECT_LT(learned.height, initial.height);
   EXPECT_LT(learned.attitude, initial.attitude);
   EXPECT_LT(learned.velocity, initial.velocity);
@@ -101,7 +107,8 @@ TEST(IocPipeline, JumpingAndSquattingFromTheHumanDemonstrator) {
   const Task jumping = learn_task("jumping.motion", "V-low-jump.motion");
   const Task squatting = learn_task("squatting.motion", "squatting.motion");
   for (const Task* task : {&jumping, &squatting}) {
-    std::printf("%-9s %12s %12s\n", task == &jumping ? "jumping" : "squatting", "learned", "hidden");
+    std::printf("%-9s %12s %12s\n", task == &jumping ? "jumping" : "squatting", "learned",
+                "hidden");
     for (int k = 0; k < kWeightCount; ++k) {
       std::printf("%-9s %12.4g %12.4g\n", kWeightNames[k], task->learned[k], task->hidden[k]);
     }
@@ -124,11 +131,13 @@ TEST(IocPipeline, JumpingAndSquattingFromTheHumanDemonstrator) {
   // small, as above): neither is asserted.
   const double cosine = cosine_similarity(jumping.learned, squatting.learned);
   const Weights hidden_ratio = jumping.hidden.cwiseQuotient(squatting.hidden);
-  const double ratio_error = torque_proportion_error(jumping.learned.cwiseQuotient(squatting.learned), hidden_ratio);
+  const double ratio_error =
+      torque_proportion_error(jumping.learned.cwiseQuotient(squatting.learned), hidden_ratio);
   const double equal_error = torque_proportion_error(Weights::Ones(), hidden_ratio);
-  std::printf("cosine similarity of the learned weights, jumping to squatting: %.3f\n"
-              "torque proportions, jumping / squatting: learned %.3f from the hidden, equal ones %.3f\n",
-              cosine, ratio_error, equal_error);
+  std::printf(
+      "cosine similarity of the learned weights, jumping to squatting: %.3f\n"
+      "torque proportions, jumping / squatting: learned %.3f from the hidden, equal ones %.3f\n",
+      cosine, ratio_error, equal_error);
   EXPECT_LT(cosine, 0.95);
   EXPECT_LT(ratio_error, equal_error);
 }

@@ -19,7 +19,8 @@ using namespace hmpc::ioc;
 using humanoid::Configuration;
 
 const Configuration& standing_pose() {
-  static const Configuration q = humanoid::standing_state(humanoid::ProblemConfig{}, humanoid::kStartHeight).q;
+  static const Configuration q =
+      humanoid::standing_state(humanoid::ProblemConfig{}, humanoid::kStartHeight).q;
   return q;
 }
 
@@ -47,9 +48,9 @@ TEST(IocRetargeting, TheDemonstratorsBodyDiffersFromTheRobots) {
 TEST(IocRetargeting, MappingScalesTheBaseAndClampsJointsToTheRobotsRange) {
   const humanoid::Parameters robot;
   Configuration q = standing_pose();
-  q[7 + humanoid::kKnee] = 2.9;                       // beyond the robot's 2.36 rad knee flexion
-  q[7 + 4 + humanoid::kAnkle] = -1.2;                 // beyond its 0.87 rad plantarflexion
-  q.segment<4>(3) *= 2.0;                             // not unit
+  q[7 + humanoid::kKnee] = 2.9;        // beyond the robot's 2.36 rad knee flexion
+  q[7 + 4 + humanoid::kAnkle] = -1.2;  // beyond its 0.87 rad plantarflexion
+  q.segment<4>(3) *= 2.0;              // not unit
   const Configuration m = map_pose(q, 0.9, robot);
   EXPECT_NEAR((m.head<3>() - 0.9 * q.head<3>()).norm(), 0.0, 1e-15);
   EXPECT_NEAR(m.segment<4>(3).norm(), 1.0, 1e-15);
@@ -94,12 +95,14 @@ TEST(IocRetargeting, DynamicTimeWarpingRecoversAKnownWarp) {
   };
   std::vector<Configuration> reference, slower;
   for (int k = 0; k * 0.03 <= 1.8; ++k) reference.push_back(pose_at(0.03 * k));
-  for (int k = 0; k * 0.03 <= 2.45; ++k) slower.push_back(pose_at(std::max(0.0, 0.03 * k - 0.2) / 1.25));
+  for (int k = 0; k * 0.03 <= 2.45; ++k)
+    slower.push_back(pose_at(std::max(0.0, 0.03 * k - 0.2) / 1.25));
   const std::vector<double> match = align(slower, reference);
   ASSERT_EQ(match.size(), reference.size());
   for (std::size_t i = 1; i < match.size(); ++i) EXPECT_GE(match[i], match[i - 1]);
   // Where the poses change (0.3 .. 1.5 s), reference sample i is the slower one's 1.25 i + 0.2 s.
-  for (int i = 12; i <= 48; ++i) EXPECT_NEAR(match[i], 1.25 * i + 0.2 / 0.03, 1.5) << "sample " << i;
+  for (int i = 12; i <= 48; ++i)
+    EXPECT_NEAR(match[i], 1.25 * i + 0.2 / 0.03, 1.5) << "sample " << i;
 }
 
 TEST(IocRetargeting, VelocitiesByDifferencesAndResampling) {
@@ -108,9 +111,12 @@ TEST(IocRetargeting, VelocitiesByDifferencesAndResampling) {
   const std::vector<humanoid::State> states = with_velocities(poses, 0.03);
   for (int k : {0, 7, 19}) {
     const humanoid::State& x = states[k];
-    EXPECT_NEAR((x.v.head<3>() - Eigen::Vector3d(0, 0, 0.5)).norm(), 0.0, 1e-9) << k;  // torso coordinates
+    EXPECT_NEAR((x.v.head<3>() - Eigen::Vector3d(0, 0, 0.5)).norm(), 0.0, 1e-9)
+        << k;  // torso coordinates
     const Eigen::Quaterniond attitude(x.q[3], x.q[4], x.q[5], x.q[6]);
-    EXPECT_NEAR((attitude * Eigen::Vector3d(x.v.segment<3>(3)) - Eigen::Vector3d(0.2, -0.1, 0.3)).norm(), 0.0, 1e-9)
+    EXPECT_NEAR(
+        (attitude * Eigen::Vector3d(x.v.segment<3>(3)) - Eigen::Vector3d(0.2, -0.1, 0.3)).norm(),
+        0.0, 1e-9)
         << k;
     for (int j = 0; j < 8; ++j) EXPECT_NEAR(x.v[6 + j], 0.1 * (j + 1), 1e-9) << k;
   }
@@ -122,9 +128,11 @@ TEST(IocRetargeting, VelocitiesByDifferencesAndResampling) {
 }
 
 TEST(IocRetargeting, AttitudeAnglesInvertTheAttitudeQuaternion) {
-  for (const Eigen::Vector3d& a : {Eigen::Vector3d(0.1, -0.3, 2.0), Eigen::Vector3d(-1.0, 1.2, -3.0),
-                                  Eigen::Vector3d(0.0, 0.0, 0.0)}) {
-    EXPECT_NEAR((attitude_angles(humanoid::attitude_quaternion(a)) - a).norm(), 0.0, 1e-12) << a.transpose();
+  for (const Eigen::Vector3d& a :
+       {Eigen::Vector3d(0.1, -0.3, 2.0), Eigen::Vector3d(-1.0, 1.2, -3.0),
+        Eigen::Vector3d(0.0, 0.0, 0.0)}) {
+    EXPECT_NEAR((attitude_angles(humanoid::attitude_quaternion(a)) - a).norm(), 0.0, 1e-12)
+        << a.transpose();
   }
 }
 
@@ -151,9 +159,11 @@ TEST(IocRetargeting, MotionAlongTargetsEveryStep) {
 
 TEST(IocRetargeting, JointTrackingTermWeighsTheLegJoints) {
   humanoid::Motion m = test::jump_motion();
-  const humanoid::State x = humanoid::standing_state(humanoid::ProblemConfig{}, humanoid::kStartHeight);
+  const humanoid::State x =
+      humanoid::standing_state(humanoid::ProblemConfig{}, humanoid::kStartHeight);
   const auto rows = [&](const humanoid::Motion& motion) {
-    return humanoid::StateCost(motion, x, humanoid::ProblemConfig{}).residual(humanoid::to_vector(x), 0.0);
+    return humanoid::StateCost(motion, x, humanoid::ProblemConfig{})
+        .residual(humanoid::to_vector(x), 0.0);
   };
   EXPECT_EQ(rows(m).segment<8>(18).norm(), 0.0);  // w_joint = 0 in every file
   m.weights.joint = 4.0;
@@ -165,7 +175,8 @@ TEST(IocRetargeting, JointTrackingTermWeighsTheLegJoints) {
 TEST(IocRetargeting, RejectsBadCapturesAndSettings) {
   const humanoid::Motion task = test::jump_motion();
   EXPECT_THROW(retarget({}, task, RetargetConfig{}), std::invalid_argument);
-  EXPECT_THROW(retarget({Capture{{standing_pose()}}}, task, RetargetConfig{}), std::invalid_argument);
+  EXPECT_THROW(retarget({Capture{{standing_pose()}}}, task, RetargetConfig{}),
+               std::invalid_argument);
   CaptureConfig config;
   config.count = 0;
   EXPECT_THROW(capture_demonstrations(task, config), std::invalid_argument);

@@ -40,7 +40,8 @@ TEST(Lbfgs, RejectsANonFiniteStart) {
     g = x;
     return std::nan("");
   };
-  EXPECT_THROW(minimize_lbfgs(bad, Eigen::Vector2d(1.0, 1.0), LbfgsConfig{}), std::invalid_argument);
+  EXPECT_THROW(minimize_lbfgs(bad, Eigen::Vector2d(1.0, 1.0), LbfgsConfig{}),
+               std::invalid_argument);
 }
 
 TEST(LocalIoc, GradientMatchesFiniteDifferences) {
@@ -60,7 +61,8 @@ TEST(LocalIoc, GradientMatchesFiniteDifferences) {
   // Central differences in log w_k at steps h and h/2 combined by Richardson extrapolation,
   // (4 D(h/2) - D(h)) / 3, which cancels the h^2 error term. Tolerance 5e-4 relative: on
   // aarch64 (qemu) the differences of w_q1 stay 1.2e-4 to 1.7e-4 off with or without extrapolation,
-  // the likelihood's own round-off there; gradient bugs met while writing this were 10 % off or more.
+  // the likelihood's own round-off there; gradient bugs met while writing this were 10 % off or
+  // more.
   const auto difference = [&](int k, double h) {
     Weights plus = w, minus = w;
     plus[k] *= std::exp(h);
@@ -110,7 +112,9 @@ TEST(IocFiles, WeightsRoundTripAndBadFilesAreRejected) {
   std::ostringstream good;
   write_weights(good, w);
   const std::string text = good.str();
-  const auto parse = [](std::istream& in, const std::string& source) { return parse_weights(in, source); };
+  const auto parse = [](std::istream& in, const std::string& source) {
+    return parse_weights(in, source);
+  };
   expect_rejected(parse, "", "no version line");
   expect_rejected(parse, "hmpc-ioc-weights 2\n", "version line");
   const std::string height = "w_height = 0.33333333333333331\n";
@@ -157,7 +161,9 @@ TEST(IocFiles, DemonstrationsRoundTripAndBadFilesAreRejected) {
   EXPECT_EQ(read[0].inputs, a.inputs);
   EXPECT_EQ(read[1].inputs, b.inputs);
 
-  const auto parse = [](std::istream& in, const std::string& source) { return parse_demonstrations(in, source); };
+  const auto parse = [](std::istream& in, const std::string& source) {
+    return parse_demonstrations(in, source);
+  };
   std::vector<std::string> lines;
   std::istringstream split(text);
   for (std::string line; std::getline(split, line);) lines.push_back(line);
@@ -192,7 +198,8 @@ TEST(IocFiles, DemonstrationsRoundTripAndBadFilesAreRejected) {
   expect_rejected(parse, edit(4, 35, "1"), "all eight or none");
   expect_rejected(parse, join({lines[0], lines[1], lines[2]}), "ends inside a demonstration");
   expect_rejected(parse, join({lines[0], lines[1], lines[4]}), "at least one input");
-  expect_rejected(parse, join({lines[0], lines[1], lines[2], lines[3], lines[4], lines[4]}), "after the demonstration's last row");
+  expect_rejected(parse, join({lines[0], lines[1], lines[2], lines[3], lines[4], lines[4]}),
+                  "after the demonstration's last row");
   expect_rejected(parse, join({lines[0], lines[1], lines[2], lines[5]}), "last row has inputs");
   std::string short_row = lines[2].substr(0, lines[2].rfind(','));
   expect_rejected(parse, join({lines[0], lines[1], short_row}), "expected 39 fields");

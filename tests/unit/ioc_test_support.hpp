@@ -14,7 +14,8 @@ inline humanoid::Motion jump_motion() {
 }
 
 // A demonstration by the robot's own Coarse MPC (untruncated: the same on any machine).
-inline Demonstration own_demonstration(const humanoid::Motion& motion, double duration, const Eigen::Vector3d& nudge) {
+inline Demonstration own_demonstration(const humanoid::Motion& motion, double duration,
+                                       const Eigen::Vector3d& nudge) {
   humanoid::ClosedLoopConfig config;
   config.mpc = humanoid::MpcKind::kCoarse;
   config.truncate = false;

@@ -1,6 +1,8 @@
 // Joint-level PID with load-velocity feedback (thesis Sec. 2.7.3, refs. [69, 70]): each term
 // against hand-computed values, limits, anti-windup, derivative filtering, input validation,
 // and rejection of a load-velocity disturbance on a simulated valve-driven actuator.
+#include "hmpc/control/load_velocity_feedback_pid.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,8 +11,6 @@
 #include <cstdio>
 #include <limits>
 #include <random>
-
-#include "hmpc/control/load_velocity_feedback_pid.hpp"
 
 namespace {
 
@@ -275,10 +275,14 @@ TEST(LoadVelocityFeedbackPid, NonFiniteInputsGiveSafeOutputAndFault) {
     Fault fault;
   };
   const Case cases[] = {
-      {nan, 0.0, 0.0, kDt, Fault::kNonFiniteInput}, {0.0, nan, 0.0, kDt, Fault::kNonFiniteInput},
-      {0.0, 0.0, nan, kDt, Fault::kNonFiniteInput}, {0.0, 0.0, 0.0, nan, Fault::kNonFiniteInput},
-      {inf, 0.0, 0.0, kDt, Fault::kNonFiniteInput}, {0.0, -inf, 0.0, kDt, Fault::kNonFiniteInput},
-      {0.0, 0.0, inf, kDt, Fault::kNonFiniteInput}, {0.0, 0.0, 0.0, inf, Fault::kNonFiniteInput},
+      {nan, 0.0, 0.0, kDt, Fault::kNonFiniteInput},
+      {0.0, nan, 0.0, kDt, Fault::kNonFiniteInput},
+      {0.0, 0.0, nan, kDt, Fault::kNonFiniteInput},
+      {0.0, 0.0, 0.0, nan, Fault::kNonFiniteInput},
+      {inf, 0.0, 0.0, kDt, Fault::kNonFiniteInput},
+      {0.0, -inf, 0.0, kDt, Fault::kNonFiniteInput},
+      {0.0, 0.0, inf, kDt, Fault::kNonFiniteInput},
+      {0.0, 0.0, 0.0, inf, Fault::kNonFiniteInput},
       {0.0, 0.0, 0.0, 0.0, Fault::kNonPositiveTimeStep},
       {0.0, 0.0, 0.0, -kDt, Fault::kNonPositiveTimeStep},
   };
@@ -450,10 +454,11 @@ double rms_torque_error(const ValveActuator& plant, const Config& config) {
       const PlantState k2 = derivative(plant, add(x, k1, h / 2), u, ti + h / 2);
       const PlantState k3 = derivative(plant, add(x, k2, h / 2), u, ti + h / 2);
       const PlantState k4 = derivative(plant, add(x, k3, h), u, ti + h);
-      x = add(x, {k1.tau + 2 * k2.tau + 2 * k3.tau + k4.tau,
-                  k1.spool + 2 * k2.spool + 2 * k3.spool + k4.spool,
-                  k1.angle + 2 * k2.angle + 2 * k3.angle + k4.angle,
-                  k1.velocity + 2 * k2.velocity + 2 * k3.velocity + k4.velocity},
+      x = add(x,
+              {k1.tau + 2 * k2.tau + 2 * k3.tau + k4.tau,
+               k1.spool + 2 * k2.spool + 2 * k3.spool + k4.spool,
+               k1.angle + 2 * k2.angle + 2 * k3.angle + k4.angle,
+               k1.velocity + 2 * k2.velocity + 2 * k3.velocity + k4.velocity},
               h / 6);
     }
   }
@@ -465,9 +470,9 @@ double rms_torque_error(const ValveActuator& plant, const Config& config) {
 // of phase margin with the spool lag and the hold.
 Config torque_pid() {
   Config c;
-  c.kp = 0.01;        // 1 / (N·m)
-  c.ki = 0.4;         // 1 / (N·m·s)
-  c.kd = 2e-5;        // s / (N·m)
+  c.kp = 0.01;  // 1 / (N·m)
+  c.ki = 0.4;   // 1 / (N·m·s)
+  c.kd = 2e-5;  // s / (N·m)
   c.derivative_time_constant = 1e-3;
   c.integral_limit = 1.0;
   c.output_min = -1.0;
@@ -497,8 +502,10 @@ RejectionResult compare(const ValveActuator& plant, double velocity_gain) {
 TEST(LoadVelocityFeedbackPid, RejectsImposedLoadVelocityBetterThanPlainPid) {
   const ValveActuator plant;
   const RejectionResult r = compare(plant, plant.k_v / plant.k_q);
-  std::printf("imposed velocity: RMS torque error plain PID %.3f N·m, PID+LVF %.3f N·m, "
-              "ratio %.4f\n", r.plain, r.lvf, r.ratio);
+  std::printf(
+      "imposed velocity: RMS torque error plain PID %.3f N·m, PID+LVF %.3f N·m, "
+      "ratio %.4f\n",
+      r.plain, r.lvf, r.ratio);
   EXPECT_GT(r.plain, 1.0);  // the disturbance is really felt by the plain loop
   EXPECT_LT(r.ratio, 0.5);
   EXPECT_LT(r.ratio, 0.1);
@@ -508,8 +515,10 @@ TEST(LoadVelocityFeedbackPid, RejectsCompliantLoadMotionBetterThanPlainPid) {
   ValveActuator plant;
   plant.compliant_load = true;
   const RejectionResult r = compare(plant, plant.k_v / plant.k_q);
-  std::printf("compliant load: RMS torque error plain PID %.3f N·m, PID+LVF %.3f N·m, "
-              "ratio %.4f\n", r.plain, r.lvf, r.ratio);
+  std::printf(
+      "compliant load: RMS torque error plain PID %.3f N·m, PID+LVF %.3f N·m, "
+      "ratio %.4f\n",
+      r.plain, r.lvf, r.ratio);
   EXPECT_GT(r.plain, 1.0);
   EXPECT_LT(r.ratio, 0.5);
 }
@@ -520,8 +529,10 @@ TEST(LoadVelocityFeedbackPid, RejectsCompliantLoadMotionBetterThanPlainPid) {
 TEST(LoadVelocityFeedbackPid, LoadVelocityGainErrorDegradesGracefully) {
   const ValveActuator plant;
   const RejectionResult r = compare(plant, 0.7 * plant.k_v / plant.k_q);
-  std::printf("k_lvf 30%% low: RMS torque error plain PID %.3f N·m, PID+LVF %.3f N·m, "
-              "ratio %.4f\n", r.plain, r.lvf, r.ratio);
+  std::printf(
+      "k_lvf 30%% low: RMS torque error plain PID %.3f N·m, PID+LVF %.3f N·m, "
+      "ratio %.4f\n",
+      r.plain, r.lvf, r.ratio);
   EXPECT_LT(r.ratio, 0.5);
   EXPECT_NEAR(r.ratio, 0.3, 0.05);
 }

@@ -30,8 +30,8 @@
 #include <cstring>
 #include <string>
 
-#include "hmpc/platform/linux/bus_program.hpp"
 #include "forearm_board.hpp"
+#include "hmpc/platform/linux/bus_program.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/platform/linux/socketcan.hpp"
 #include "options.hpp"
@@ -44,9 +44,9 @@ namespace proto = hmpc::forearm_protocol;
 using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
-using hmpc::platform::SocketCan;
 using hmpc::platform::describe;
 using hmpc::platform::monotonic_seconds;
+using hmpc::platform::SocketCan;
 using hmpc::platform::to_can_frame;
 using hmpc::platform::to_protocol_frame;
 namespace heap_monitor = hmpc::platform::heap_monitor;
@@ -56,7 +56,6 @@ constexpr const char* kProgram = "hmpc-forearm-board";
 constexpr long kTickNs = 1'000'000;
 // Frames taken from the socket per wake-up: a flooded bus must not starve the tick.
 constexpr int kMaxFramesPerDrain = 64;
-
 
 class FileDescriptor {
  public:
@@ -76,8 +75,8 @@ enum class StopReason { kSignal, kDuration, kBusError, kSystemError };
 
 // What ended the loop when it was not asked to end.
 struct LoopFailure {
-  CanResult receive;         // kBusError
-  const char* call = "";     // kSystemError: the system call that failed, with its errno
+  CanResult receive;      // kBusError
+  const char* call = "";  // kSystemError: the system call that failed, with its errno
   int error_number = 0;
 
   StopReason system_error(const char* failed_call) {
@@ -129,8 +128,8 @@ class BoardLoop {
   // ActuatorCommand counter so the plant accepts it. A full queue is retried for 100 ms.
   bool send_safe_outputs() {
     proto::Frame frame;
-    if (safe_sender_.encode(proto::ActuatorCommand{float(safe_.v_p), float(safe_.v_m), 0},
-                            frame) != proto::EncodeResult::kOk) {
+    if (safe_sender_.encode(proto::ActuatorCommand{float(safe_.v_p), float(safe_.v_m), 0}, frame) !=
+        proto::EncodeResult::kOk) {
       return false;
     }
     for (int attempt = 0; attempt < 100; ++attempt) {
@@ -202,9 +201,12 @@ StopReason run_lockstep(Board& board, BoardLoop& loop, SocketCan& can, int signa
     }
     if (fds[1].revents & POLLIN) return StopReason::kSignal;
     if (fds[0].revents == 0) continue;
-    const bool ok = drain(can, loop, [&](bool sync_accepted) {
-      if (sync_accepted && loop.tick(monotonic_seconds() - start_s)) board.run_mpc();
-    }, failure);
+    const bool ok = drain(
+        can, loop,
+        [&](bool sync_accepted) {
+          if (sync_accepted && loop.tick(monotonic_seconds() - start_s)) board.run_mpc();
+        },
+        failure);
     if (!ok) return StopReason::kBusError;
   }
 }
@@ -239,7 +241,9 @@ StopReason run_real_time(Board& board, BoardLoop& loop, SocketCan& can, int sign
     if (woke_s - due_s > stats.max_wakeup_latency_s) stats.max_wakeup_latency_s = woke_s - due_s;
     bool mpc_due = false;
     for (std::uint64_t i = 0; i < expirations; ++i) {
-      if (!drain(can, loop, [](bool) {}, failure)) return StopReason::kBusError;
+      if (!drain(
+              can, loop, [](bool) {}, failure))
+        return StopReason::kBusError;
       mpc_due = loop.tick(woke_s - start_s) || mpc_due;
     }
     if (mpc_due) board.run_mpc();
@@ -289,8 +293,8 @@ int main(int argc, char** argv) {
   BoardLoop loop(board, config, can, log);
 
   if (!options.lockstep && ::mlockall(MCL_CURRENT | MCL_FUTURE) < 0) {
-    std::fprintf(stderr, "%s: note: mlockall failed (%s): page faults may delay ticks\n",
-                 kProgram, std::strerror(errno));
+    std::fprintf(stderr, "%s: note: mlockall failed (%s): page faults may delay ticks\n", kProgram,
+                 std::strerror(errno));
   }
   std::printf("%s: node %u on %s, %s%s: ready\n", kProgram, unsigned(options.node),
               options.interface.c_str(), options.lockstep ? "lock-step" : "real time, 1 kHz",
@@ -326,8 +330,8 @@ int main(int argc, char** argv) {
       std::printf("%s: stopped after --duration %g s\n", kProgram, options.duration_s);
       break;
     case StopReason::kBusError:
-      std::fprintf(stderr, "%s: receiving on %s failed: %s\n", kProgram,
-                   options.interface.c_str(), describe(failure.receive).c_str());
+      std::fprintf(stderr, "%s: receiving on %s failed: %s\n", kProgram, options.interface.c_str(),
+                   describe(failure.receive).c_str());
       status = 1;
       break;
     case StopReason::kSystemError:
@@ -349,9 +353,9 @@ int main(int argc, char** argv) {
       kProgram, static_cast<unsigned long long>(stats.ticks), elapsed_s,
       elapsed_s > 0 ? double(stats.ticks) / elapsed_s : 0.0,
       value_name(proto::kBoardModeValues, std::uint32_t(board.mode())), unsigned(board.faults()),
-      c.mpc_steps, c.solver_failures, c.overruns, c.fallbacks,
-      c.watchdog_trips, c.sensor_timeouts, c.refused_commands, board.rejects().total(),
-      board.dropped_frames(), static_cast<unsigned long long>(stats.transmit_failures),
+      c.mpc_steps, c.solver_failures, c.overruns, c.fallbacks, c.watchdog_trips, c.sensor_timeouts,
+      c.refused_commands, board.rejects().total(), board.dropped_frames(),
+      static_cast<unsigned long long>(stats.transmit_failures),
       static_cast<unsigned long long>(stats.timer_overruns), stats.max_busy_s * 1e3,
       stats.max_wakeup_latency_s * 1e3,
       static_cast<unsigned long long>(heap_monitor::allocations()), safe_sent ? 1 : 0,

@@ -17,8 +17,8 @@ struct Options {
   bool lockstep = false;
   bool emulate_cortex_m7 = false;  // lock-step: charge solves the STM32H743's compute time
   double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
-  double duration_s = 0;  // 0: until SIGINT or SIGTERM
-  std::string log_path;   // empty: no log
+  double duration_s = 0;           // 0: until SIGINT or SIGTERM
+  std::string log_path;            // empty: no log
 };
 
 // Long enough for any run a test or an experiment needs, short enough that the tick count
@@ -58,8 +58,8 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
   cli::OptionParser parser;
   parser.text("--interface", [&](const std::string& v) -> std::string {
     if (v.empty() || v.size() >= IFNAMSIZ)
-      return cli::bad_value("--interface", "a name of 1.." + std::to_string(IFNAMSIZ - 1) +
-                                               " characters", v);
+      return cli::bad_value("--interface",
+                            "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
     options.interface = v;
     return {};
   });

@@ -25,7 +25,7 @@ class TickLog {
     forearm_protocol::BoardMode mode;
     std::uint8_t faults;
     forearm_protocol::Strategy strategy;
-    float v_p, v_m;  // V, the outputs applied this tick
+    float v_p, v_m;                           // V, the outputs applied this tick
     std::uint32_t heartbeat_age, sensor_age;  // ticks since the last accepted one
   };
 

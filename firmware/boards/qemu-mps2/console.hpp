@@ -16,8 +16,7 @@ class Console {
     while (*text && length_ < kCapacity - 2) line_[length_++] = *text++;
     return *this;
   }
-  template <typename Integer,
-            typename = std::enable_if_t<std::is_integral_v<Integer>>>
+  template <typename Integer, typename = std::enable_if_t<std::is_integral_v<Integer>>>
   Console& operator<<(Integer value) {
     std::uint64_t magnitude = static_cast<std::uint64_t>(value);
     if constexpr (std::is_signed_v<Integer>) {

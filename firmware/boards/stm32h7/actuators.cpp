@@ -51,7 +51,8 @@ static_assert(compare_values(0.0, 6.0).motor_in1 == kPwmPeriod / 2 &&
 static_assert(compare_values(0.0, -6.0).motor_in2 == kPwmPeriod / 2 &&
               compare_values(0.0, -6.0).motor_in1 == 0);
 static_assert(compare_values(std::numeric_limits<double>::quiet_NaN(),
-                             std::numeric_limits<double>::quiet_NaN()).valve == 0 &&
+                             std::numeric_limits<double>::quiet_NaN())
+                      .valve == 0 &&
               compare_values(0.0, std::numeric_limits<double>::quiet_NaN()).motor_in1 == 0 &&
               compare_values(0.0, std::numeric_limits<double>::quiet_NaN()).motor_in2 == 0);
 static_assert(compare_values(0.0, -std::numeric_limits<double>::infinity()).motor_in2 ==

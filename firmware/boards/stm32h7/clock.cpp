@@ -71,8 +71,8 @@ Status configure_system_clock() {
   rcc.PLLCKSELR = (rcc.PLLCKSELR & ~((0x3Fu << 4) | 0x3u)) | (kPll1InputDivider << 4);
   rcc.PLLCFGR = (rcc.PLLCFGR & ~(0xFu | (0x7u << 16))) | (0x3u << 2) | (1u << 16) | (1u << 17);
   rcc.PLL1FRACR = 0;
-  rcc.PLL1DIVR = (kPll1Multiplier - 1) | ((kPll1PDivider - 1) << 9) |
-                 ((kPll1QDivider - 1) << 16) | (1u << 24);
+  rcc.PLL1DIVR =
+      (kPll1Multiplier - 1) | ((kPll1PDivider - 1) << 9) | ((kPll1QDivider - 1) << 16) | (1u << 24);
   rcc.CR = rcc.CR | rcc::kCrPll1On;
   if (!wait_until([&] { return (rcc.CR & rcc::kCrPll1Rdy) != 0; })) return Status::kPllNotLocked;
 

@@ -44,12 +44,12 @@ static_assert(kFdcanKernelHz == 80'000'000);
 
 enum class Status : std::uint8_t {
   kOk,
-  kSupplyNotReady,     // PWR_CSR1.ACTVOSRDY never set
-  kVoltageNotReady,    // PWR_D3CR.VOSRDY never set after selecting scale 1
-  kPllNotStopped,      // RCC_CR.PLL1RDY stayed set, or HSI not ready at /1
-  kFlashLatency,       // FLASH_ACR did not take the new wait states
-  kPllNotLocked,       // RCC_CR.PLL1RDY never set
-  kSwitchNotDone,      // RCC_CFGR.SWS never reported the new system clock
+  kSupplyNotReady,   // PWR_CSR1.ACTVOSRDY never set
+  kVoltageNotReady,  // PWR_D3CR.VOSRDY never set after selecting scale 1
+  kPllNotStopped,    // RCC_CR.PLL1RDY stayed set, or HSI not ready at /1
+  kFlashLatency,     // FLASH_ACR did not take the new wait states
+  kPllNotLocked,     // RCC_CR.PLL1RDY never set
+  kSwitchNotDone,    // RCC_CFGR.SWS never reported the new system clock
 };
 
 // Supply, voltage scale, flash wait states, PLL1, bus prescalers, switch to PLL1. Called once

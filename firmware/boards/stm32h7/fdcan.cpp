@@ -93,8 +93,8 @@ constexpr std::uint32_t kGfcRejectAllElse = (2u << 4) | (2u << 2) | (1u << 1) | 
 constexpr std::uint32_t kRxf0sFillLevelMask = 0x7Fu;  // F0FL[6:0]
 constexpr std::uint32_t kRxf0sGetIndexShift = 8;      // F0GI[13:8]
 // TXFQS
-constexpr std::uint32_t kTxfqsFull = 1u << 21;         // TFQF
-constexpr std::uint32_t kTxfqsPutIndexShift = 16;      // TFQPI[20:16]
+constexpr std::uint32_t kTxfqsFull = 1u << 21;     // TFQF
+constexpr std::uint32_t kTxfqsPutIndexShift = 16;  // TFQPI[20:16]
 // Message RAM element headers (RM0433, RX FIFO and TX buffer elements): word 0 holds
 // the identifier (a standard one in [28:18]) with XTD (30) and RTR (29); word 1 holds the DLC
 // in [19:16] (TX: FDF, BRS, EFC all 0 for a classic frame without TX events).

@@ -144,18 +144,18 @@ struct FdcanConfig {
 };
 
 struct FdcanStatus {
-  bool bus_off = false;           // PSR.BO: the controller has left the bus
-  bool error_passive = false;     // PSR.EP: an error counter is above 127
-  bool error_warning = false;     // PSR.EW: an error counter has reached 96
-  std::uint8_t tx_errors = 0;     // ECR.TEC
-  std::uint8_t rx_errors = 0;     // ECR.REC (128 when ECR.RP says receive error passive)
-  std::uint8_t last_error = 0;    // PSR.LEC: 0 none, 1 stuff, 2 form, 3 ack, 4 bit1, 5 bit0,
-                                  // 6 CRC, 7 no change since the last read
+  bool bus_off = false;         // PSR.BO: the controller has left the bus
+  bool error_passive = false;   // PSR.EP: an error counter is above 127
+  bool error_warning = false;   // PSR.EW: an error counter has reached 96
+  std::uint8_t tx_errors = 0;   // ECR.TEC
+  std::uint8_t rx_errors = 0;   // ECR.REC (128 when ECR.RP says receive error passive)
+  std::uint8_t last_error = 0;  // PSR.LEC: 0 none, 1 stuff, 2 form, 3 ack, 4 bit1, 5 bit0,
+                                // 6 CRC, 7 no change since the last read
 };
 
 struct FdcanCounters {
-  std::uint32_t rx_overflows = 0;        // IR.RF0L events: the full RX FIFO dropped frames
-  std::uint32_t tx_full = 0;             // send() calls refused because the TX FIFO was full
+  std::uint32_t rx_overflows = 0;  // IR.RF0L events: the full RX FIFO dropped frames
+  std::uint32_t tx_full = 0;       // send() calls refused because the TX FIFO was full
   std::uint32_t bus_off_events = 0;
   std::uint32_t bus_off_recoveries = 0;  // restarts after kBusOffRestartDelayMs
 };
@@ -164,11 +164,11 @@ class Fdcan {
  public:
   enum class InitResult : std::uint8_t {
     kOk,
-    kBadTiming,      // FdcanConfig::timing is outside the NBTP ranges
-    kBadPins,        // not one of FDCAN1's AF9 pin pairs
-    kBadNode,        // node above forearm_protocol::kMaxNodeId
-    kInitTimeout,    // CCCR.INIT never read back as set
-    kStartTimeout,   // CCCR.INIT never read back as cleared: is the kernel clock running?
+    kBadTiming,     // FdcanConfig::timing is outside the NBTP ranges
+    kBadPins,       // not one of FDCAN1's AF9 pin pairs
+    kBadNode,       // node above forearm_protocol::kMaxNodeId
+    kInitTimeout,   // CCCR.INIT never read back as set
+    kStartTimeout,  // CCCR.INIT never read back as cleared: is the kernel clock running?
   };
 
   // A bus-off node waits this long before rejoining (the controller then also waits for

@@ -15,8 +15,8 @@ namespace {
 void zero_axi_sram() {
   for (std::uint32_t* word = _saxisram; word < _eaxisram; ++word) *word = 0;
 }
-__attribute__((section(".preinit_array"), used)) void (*const zero_axi_sram_at_boot)() =
-    zero_axi_sram;
+__attribute__((section(".preinit_array"),
+               used)) void (*const zero_axi_sram_at_boot)() = zero_axi_sram;
 
 }  // namespace
 

@@ -14,60 +14,60 @@ using Reg = volatile std::uint32_t;
 // RCC (RM0433, RCC register map), base 0x5802 4400. The xxxENR registers are the
 // CPU-independent aliases at 0x0D4..0x0F4 (not the C1_ copies at 0x130+).
 struct Rcc {
-  Reg CR;         // 0x000 clock control: HSION/HSIRDY/HSIDIV, PLL1ON/PLL1RDY
-  Reg HSICFGR;    // 0x004
-  Reg CRRCR;      // 0x008
-  Reg CSICFGR;    // 0x00C
-  Reg CFGR;       // 0x010 system clock switch SW/SWS
-  Reg reserved0;  // 0x014
-  Reg D1CFGR;     // 0x018 D1CPRE, HPRE, D1PPRE
-  Reg D2CFGR;     // 0x01C D2PPRE1, D2PPRE2
-  Reg D3CFGR;     // 0x020 D3PPRE
-  Reg reserved1;  // 0x024
-  Reg PLLCKSELR;  // 0x028 PLLSRC, DIVM1..3
-  Reg PLLCFGR;    // 0x02C PLLxFRACEN/VCOSEL/RGE, DIVyxEN
-  Reg PLL1DIVR;   // 0x030 DIVN1, DIVP1, DIVQ1, DIVR1
-  Reg PLL1FRACR;  // 0x034
-  Reg PLL2DIVR;   // 0x038
-  Reg PLL2FRACR;  // 0x03C
-  Reg PLL3DIVR;   // 0x040
-  Reg PLL3FRACR;  // 0x044
-  Reg reserved2;  // 0x048
-  Reg D1CCIPR;    // 0x04C
-  Reg D2CCIP1R;   // 0x050 FDCANSEL among others
-  Reg D2CCIP2R;   // 0x054
-  Reg D3CCIPR;    // 0x058
-  Reg reserved3;  // 0x05C
-  Reg CIER;       // 0x060
-  Reg CIFR;       // 0x064
-  Reg CICR;       // 0x068
-  Reg reserved4;  // 0x06C
-  Reg BDCR;       // 0x070
-  Reg CSR;        // 0x074
-  Reg reserved5;  // 0x078
-  Reg AHB3RSTR;   // 0x07C
-  Reg AHB1RSTR;   // 0x080
-  Reg AHB2RSTR;   // 0x084
-  Reg AHB4RSTR;   // 0x088
-  Reg APB3RSTR;   // 0x08C
-  Reg APB1LRSTR;  // 0x090
-  Reg APB1HRSTR;  // 0x094 FDCANRST
-  Reg APB2RSTR;   // 0x098
-  Reg APB4RSTR;   // 0x09C
-  Reg GCR;        // 0x0A0
-  Reg reserved6;  // 0x0A4
-  Reg D3AMR;      // 0x0A8
+  Reg CR;            // 0x000 clock control: HSION/HSIRDY/HSIDIV, PLL1ON/PLL1RDY
+  Reg HSICFGR;       // 0x004
+  Reg CRRCR;         // 0x008
+  Reg CSICFGR;       // 0x00C
+  Reg CFGR;          // 0x010 system clock switch SW/SWS
+  Reg reserved0;     // 0x014
+  Reg D1CFGR;        // 0x018 D1CPRE, HPRE, D1PPRE
+  Reg D2CFGR;        // 0x01C D2PPRE1, D2PPRE2
+  Reg D3CFGR;        // 0x020 D3PPRE
+  Reg reserved1;     // 0x024
+  Reg PLLCKSELR;     // 0x028 PLLSRC, DIVM1..3
+  Reg PLLCFGR;       // 0x02C PLLxFRACEN/VCOSEL/RGE, DIVyxEN
+  Reg PLL1DIVR;      // 0x030 DIVN1, DIVP1, DIVQ1, DIVR1
+  Reg PLL1FRACR;     // 0x034
+  Reg PLL2DIVR;      // 0x038
+  Reg PLL2FRACR;     // 0x03C
+  Reg PLL3DIVR;      // 0x040
+  Reg PLL3FRACR;     // 0x044
+  Reg reserved2;     // 0x048
+  Reg D1CCIPR;       // 0x04C
+  Reg D2CCIP1R;      // 0x050 FDCANSEL among others
+  Reg D2CCIP2R;      // 0x054
+  Reg D3CCIPR;       // 0x058
+  Reg reserved3;     // 0x05C
+  Reg CIER;          // 0x060
+  Reg CIFR;          // 0x064
+  Reg CICR;          // 0x068
+  Reg reserved4;     // 0x06C
+  Reg BDCR;          // 0x070
+  Reg CSR;           // 0x074
+  Reg reserved5;     // 0x078
+  Reg AHB3RSTR;      // 0x07C
+  Reg AHB1RSTR;      // 0x080
+  Reg AHB2RSTR;      // 0x084
+  Reg AHB4RSTR;      // 0x088
+  Reg APB3RSTR;      // 0x08C
+  Reg APB1LRSTR;     // 0x090
+  Reg APB1HRSTR;     // 0x094 FDCANRST
+  Reg APB2RSTR;      // 0x098
+  Reg APB4RSTR;      // 0x09C
+  Reg GCR;           // 0x0A0
+  Reg reserved6;     // 0x0A4
+  Reg D3AMR;         // 0x0A8
   Reg reserved7[9];  // 0x0AC..0x0CC
-  Reg RSR;        // 0x0D0
-  Reg AHB3ENR;    // 0x0D4
-  Reg AHB1ENR;    // 0x0D8
-  Reg AHB2ENR;    // 0x0DC
-  Reg AHB4ENR;    // 0x0E0 GPIOxEN
-  Reg APB3ENR;    // 0x0E4
-  Reg APB1LENR;   // 0x0E8 TIMxEN for TIM2..7
-  Reg APB1HENR;   // 0x0EC FDCANEN
-  Reg APB2ENR;    // 0x0F0
-  Reg APB4ENR;    // 0x0F4
+  Reg RSR;           // 0x0D0
+  Reg AHB3ENR;       // 0x0D4
+  Reg AHB1ENR;       // 0x0D8
+  Reg AHB2ENR;       // 0x0DC
+  Reg AHB4ENR;       // 0x0E0 GPIOxEN
+  Reg APB3ENR;       // 0x0E4
+  Reg APB1LENR;      // 0x0E8 TIMxEN for TIM2..7
+  Reg APB1HENR;      // 0x0EC FDCANEN
+  Reg APB2ENR;       // 0x0F0
+  Reg APB4ENR;       // 0x0F4
 };
 static_assert(offsetof(Rcc, PLLCKSELR) == 0x028);
 static_assert(offsetof(Rcc, D2CCIP1R) == 0x050);

@@ -40,9 +40,9 @@ namespace proto = hmpc::forearm_protocol;
 using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;
 using hmpc::platform::CanStatus;
-using hmpc::platform::SocketCan;
 using hmpc::platform::describe;
 using hmpc::platform::monotonic_seconds;
+using hmpc::platform::SocketCan;
 
 constexpr const char* kProgram = "hmpc-forearm-plant";
 constexpr int kHeartbeatPeriodTicks = 10;  // the host's ModeCommand period (protocol)
@@ -53,7 +53,7 @@ constexpr int kHostMissesBeforeGivingUp = 3;
 // How far the joint may pass a stop before the run counts as having left its limits: the
 // stops' compression when the vented arm falls onto them from the top of the range (~0.03 rad,
 // forearm.hpp) with a margin.
-constexpr double kStopTolerance = 0.05;    // rad
+constexpr double kStopTolerance = 0.05;  // rad
 
 struct Summary {
   std::uint64_t steps = 0;
@@ -243,9 +243,10 @@ End run_lockstep(const Options& o, SocketCan& can, PlantNode& node, int signal_f
     if (waiting_for_host && k % kHeartbeatPeriodTicks == 0) {
       host_misses = host_seen ? 0 : host_misses + 1;
       if (host_misses == kHostMissesBeforeGivingUp) {
-        std::fprintf(stderr, "%s: no host heartbeat for %d periods (step %llu): no longer "
-                     "waiting for the host\n", kProgram, host_misses,
-                     static_cast<unsigned long long>(k));
+        std::fprintf(stderr,
+                     "%s: no host heartbeat for %d periods (step %llu): no longer "
+                     "waiting for the host\n",
+                     kProgram, host_misses, static_cast<unsigned long long>(k));
         waiting_for_host = false;
         node.summary().host_given_up = true;
       }
@@ -387,7 +388,9 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(s.host_waits_timed_out), s.host_given_up ? 1 : 0,
       static_cast<unsigned long long>(plant->rejected_commands()), s.steps ? s.theta_min : 0.0,
       s.steps ? s.theta_max : 0.0, within_stops ? 1 : 0, plant->applied_v_p(), plant->applied_v_m(),
-      end == End::kDone ? "duration" : end == End::kSignal ? "signal" : "failure");
+      end == End::kDone     ? "duration"
+      : end == End::kSignal ? "signal"
+                            : "failure");
   ::close(signal_fd);
   return status;
 }

@@ -18,17 +18,17 @@ namespace hmpc::hil::plant_node {
 // velocity differentiated from it and filtered at ~50 Hz, 0.01 rad/s; a 1 MPa pressure sensor
 // at 0.1 % of full scale, 0.001 MPa = 0.01 bar. Our choices, typical of such an arm.
 struct SensorNoise {
-  double theta = 0.0005;      // rad
-  double theta_dot = 0.01;    // rad/s
-  double pressure_bar = 0.01; // bar
+  double theta = 0.0005;       // rad
+  double theta_dot = 0.01;     // rad/s
+  double pressure_bar = 0.01;  // bar
 };
 
 struct Options {
   std::string interface = "vcan0";
   forearm_protocol::NodeId node = 0;
   bool lockstep = false;
-  double duration_s = 0;        // 0: until SIGINT or SIGTERM
-  double theta0 = 0;            // rad, at rest, held there by the PAM's equilibrium pressure
+  double duration_s = 0;  // 0: until SIGINT or SIGTERM
+  double theta0 = 0;      // rad, at rest, held there by the PAM's equilibrium pressure
   ForearmMismatch mismatch{};
   double noise_scale = 0;       // multiplies SensorNoise
   int sensor_delay_ms = 0;      // transport delay of sensor readings
@@ -42,7 +42,8 @@ inline constexpr double kMaxDurationS = 1e6;
 inline constexpr int kMaxSensorDelayMs = 100;
 
 inline void print_usage(std::FILE* out) {
-  std::fprintf(out,
+  std::fprintf(
+      out,
       "usage: hmpc-forearm-plant [--interface IFACE] [--node N] [--lockstep] [--duration S]\n"
       "         [--theta0 RAD] [--mass-scale X] [--friction-scale X] [--pam-time-scale X]\n"
       "         [--noise SCALE] [--seed N] [--sensor-delay-ms MS] [--drop-percent P]\n"
@@ -81,8 +82,8 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& o, std::string
   cli::OptionParser parser;
   parser.text("--interface", [&](const std::string& v) -> std::string {
     if (v.empty() || v.size() >= IFNAMSIZ)
-      return cli::bad_value("--interface", "a name of 1.." + std::to_string(IFNAMSIZ - 1) +
-                                               " characters", v);
+      return cli::bad_value("--interface",
+                            "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
     o.interface = v;
     return {};
   });
@@ -98,8 +99,8 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& o, std::string
   parser.number("--noise", 0, 10, "a scale in [0, 10]", o.noise_scale);
   parser.integer("--seed", 0, 2147483647L, o.sensor_faults.seed);
   parser.integer("--sensor-delay-ms", 0, kMaxSensorDelayMs, o.sensor_delay_ms);
-  parser.number("--drop-percent", 0, 100, "a percentage in [0, 100]",
-                o.sensor_faults.drop_fraction, 0.01);
+  parser.number("--drop-percent", 0, 100, "a percentage in [0, 100]", o.sensor_faults.drop_fraction,
+                0.01);
   parser.number("--corrupt-percent", 0, 100, "a percentage in [0, 100]",
                 o.sensor_faults.corrupt_fraction, 0.01);
   double silence_at = -1, silence_ms = 100;

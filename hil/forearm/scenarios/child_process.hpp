@@ -16,8 +16,6 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
-
 namespace hmpc::hil {
 
 inline std::string read_file(const std::string& path) {
@@ -46,7 +44,8 @@ class Child {
              const std::string& output, std::string& error) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_addopen(&actions, 2, (output + ".err").c_str(),
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
     std::vector<char*> argv;

@@ -15,9 +15,9 @@ namespace {
 
 namespace proto = forearm_protocol;
 // Generous limits: under QEMU without KVM the three programs run ~10x slower than natively.
-constexpr double kStartupS = 60;            // until the board and the host are listening
-constexpr double kWallPerSimulatedS = 60;   // worst case wall seconds per simulated second
-constexpr double kStopS = 30;               // for SIGTERM to end a program
+constexpr double kStartupS = 60;           // until the board and the host are listening
+constexpr double kWallPerSimulatedS = 60;  // worst case wall seconds per simulated second
+constexpr double kStopS = 30;              // for SIGTERM to end a program
 
 std::string number_text(double v) {
   std::ostringstream s;
@@ -37,7 +37,8 @@ bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::s
     PlantRow r{};
     if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &r.time, &r.theta,
                     &r.theta_dot, &r.pressure_bar, &r.v_p, &r.v_m, &r.tau_p, &r.tau_m) != 8) {
-      error = "plant log " + path + ": malformed row '" + line + "'";
+      error = "plant log " + path;
+      error += ": malformed row '" + line + "'";
       return false;
     }
     rows.push_back(r);
@@ -58,7 +59,8 @@ bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, st
     double wall = 0;
     if (std::sscanf(line.c_str(), "%u,%lf,%15[^,],%u,%15[^,],%lf,%lf,%u,%u", &r.tick, &wall, mode,
                     &r.faults, strategy, &r.v_p, &r.v_m, &r.heartbeat_age, &r.sensor_age) != 9) {
-      error = "board log " + path + ": malformed row '" + line + "'";
+      error = "board log " + path;
+      error += ": malformed row '" + line + "'";
       return false;
     }
     r.mode = mode;
@@ -104,24 +106,46 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
   const double duration = spec.run_at_s + spec.run_for_s + spec.settle_s;
 
   const std::string node = std::to_string(spec.node);
-  std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7", "--node",
-                                      node, "--log", dir + "board.csv"};
+  std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7", "--node", node,
+                                      "--log",      dir + "board.csv"};
   if (spec.w_v > 0) {
     board_args.push_back("--w-v");
     board_args.push_back(number_text(spec.w_v));
   }
-  std::vector<std::string> host_args{
-      "--lockstep", "--node", node, "--run", strategy_name(spec.strategy), "--frequency",
-      number_text(spec.frequency_hz), "--amplitude-deg", number_text(spec.amplitude_rad * 180 / M_PI),
-      "--run-at", number_text(spec.run_at_s), "--run-for", number_text(spec.run_for_s),
-      "--log", dir + "host.csv"};
+  std::vector<std::string> host_args{"--lockstep",
+                                     "--node",
+                                     node,
+                                     "--run",
+                                     strategy_name(spec.strategy),
+                                     "--frequency",
+                                     number_text(spec.frequency_hz),
+                                     "--amplitude-deg",
+                                     number_text(spec.amplitude_rad * 180 / M_PI),
+                                     "--run-at",
+                                     number_text(spec.run_at_s),
+                                     "--run-for",
+                                     number_text(spec.run_for_s),
+                                     "--log",
+                                     dir + "host.csv"};
   host_args.insert(host_args.end(), spec.host_args.begin(), spec.host_args.end());
-  std::vector<std::string> plant_args{
-      "--lockstep", "--node", node, "--wait-host", "--duration", number_text(duration), "--noise",
-      number_text(spec.noise_scale), "--seed", std::to_string(spec.seed), "--mass-scale",
-      number_text(spec.mismatch.mass_scale), "--friction-scale",
-      number_text(spec.mismatch.friction_scale), "--pam-time-scale",
-      number_text(spec.mismatch.pam_time_constant_scale), "--log", dir + "plant.csv"};
+  std::vector<std::string> plant_args{"--lockstep",
+                                      "--node",
+                                      node,
+                                      "--wait-host",
+                                      "--duration",
+                                      number_text(duration),
+                                      "--noise",
+                                      number_text(spec.noise_scale),
+                                      "--seed",
+                                      std::to_string(spec.seed),
+                                      "--mass-scale",
+                                      number_text(spec.mismatch.mass_scale),
+                                      "--friction-scale",
+                                      number_text(spec.mismatch.friction_scale),
+                                      "--pam-time-scale",
+                                      number_text(spec.mismatch.pam_time_constant_scale),
+                                      "--log",
+                                      dir + "plant.csv"};
   plant_args.insert(plant_args.end(), spec.plant_args.begin(), spec.plant_args.end());
 
   Child board, host, plant;
@@ -143,8 +167,8 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
   if (plant_status != 0 || host_status != 0 || board_status != 0) {
     result.error = "exit status plant " + std::to_string(plant_status) + ", host " +
                    std::to_string(host_status) + ", board " + std::to_string(board_status) +
-                   " (-1: timed out); plant said: " + plant.errors() + " host said: " +
-                   host.errors() + " board said: " + board.errors();
+                   " (-1: timed out); plant said: " + plant.errors() +
+                   " host said: " + host.errors() + " board said: " + board.errors();
     return result;
   }
 
@@ -179,7 +203,8 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
     const double t = 1e-3 * double(ms);
     const double theta_d = spec.amplitude_rad * std::sin(2 * M_PI * spec.frequency_hz * (t - t0));
     result.accumulated_cost +=
-        forearm::tracking_cost(model, weights, x.theta, theta_d, x.pressure_bar, u.v_m, true).value +
+        forearm::tracking_cost(model, weights, x.theta, theta_d, x.pressure_bar, u.v_m, true)
+            .value +
         weights.w_v * (u.v_m * u.v_m + u.v_p * u.v_p);
     squared_error += (x.theta - theta_d) * (x.theta - theta_d);
     ++counted;

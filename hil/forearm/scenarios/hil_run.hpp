@@ -30,15 +30,15 @@ struct HilRunSpec {
   forearm_protocol::NodeId node = 0;  // board node id: runs at once on one bus use different ones
   double frequency_hz = 1.0;
   double amplitude_rad = 30 * 3.14159265358979323846 / 180;  // thesis Sec. 3.3: +-30 deg
-  double run_for_s = 10;          // thesis Sec. 3.4: 10-s trials
-  double run_at_s = 0.3;          // idle, then hold, then run from here (host's script)
-  double settle_s = 0.1;          // plant keeps stepping after the run (board back in hold)
-  double noise_scale = 0;         // plant sensor noise (plant_node/options.hpp SensorNoise)
+  double run_for_s = 10;                                     // thesis Sec. 3.4: 10-s trials
+  double run_at_s = 0.3;   // idle, then hold, then run from here (host's script)
+  double settle_s = 0.1;   // plant keeps stepping after the run (board back in hold)
+  double noise_scale = 0;  // plant sensor noise (plant_node/options.hpp SensorNoise)
   std::uint64_t seed = 1;
   ForearmMismatch mismatch{};
-  double w_v = 0;                 // board's voltage weight of Eq. 3.3; 0: the thesis's default
+  double w_v = 0;  // board's voltage weight of Eq. 3.3; 0: the thesis's default
   std::vector<std::string> plant_args, host_args;  // extra options, e.g. fault injection
-  std::string directory;          // where logs and program outputs go (created)
+  std::string directory;                           // where logs and program outputs go (created)
 };
 
 // A row of the plant's log: the state at `time` and the inputs applied during the millisecond
@@ -59,13 +59,13 @@ struct BoardTickRow {
 
 struct HilRunResult {
   bool ok = false;
-  std::string error;  // why not ok: a program failed, timed out, or a log was unreadable
+  std::string error;            // why not ok: a program failed, timed out, or a log was unreadable
   double accumulated_cost = 0;  // Eq. 3.3a over the run, per control period
   double rms_error = 0;         // rad, theta - theta_d over the run
   double solve_time_max_us = 0, solve_time_median_us = 0;  // charged Cortex-M7 time
-  double deadline_misses = 0;   // MPC steps charged over the board's 3.5 ms budget
+  double deadline_misses = 0;  // MPC steps charged over the board's 3.5 ms budget
   double mean_abs_pam_torque = 0, mean_abs_motor_torque = 0;  // N·m over the run
-  double theta_min = 0, theta_max = 0;  // over the whole plant log
+  double theta_min = 0, theta_max = 0;                        // over the whole plant log
   bool within_stops = false;
   // key=value summaries the programs printed at exit.
   std::map<std::string, std::string> board, plant, host;

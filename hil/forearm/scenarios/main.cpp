@@ -42,7 +42,7 @@ constexpr hmpc::hil::ForearmMismatch kDefaultMismatch{1.05, 1.2, 1.1};
 struct Options {
   std::string out;
   std::vector<proto::Strategy> strategies{
-      proto::Strategy::kFine4ms,   proto::Strategy::kFine8ms,  proto::Strategy::kCoarse20ms,
+      proto::Strategy::kFine4ms,    proto::Strategy::kFine8ms,  proto::Strategy::kCoarse20ms,
       proto::Strategy::kCoarse40ms, proto::Strategy::kTwoStage, proto::Strategy::kPamOnly};
   std::vector<double> frequencies{0.25, 0.5, 1.0};
   long trials = 5;
@@ -54,7 +54,8 @@ struct Options {
 };
 
 void print_usage(std::FILE* out) {
-  std::fprintf(out,
+  std::fprintf(
+      out,
       "usage: hmpc-forearm-hil --out DIR [--strategies LIST] [--frequencies LIST] [--trials N]\n"
       "         [--duration S] [--noise SCALE] [--no-mismatch] [--weight-sweep] [--jobs N]\n"
       "Runs board, host and Simbody plant in lock-step over vcan0 for each strategy, target\n"
@@ -202,10 +203,10 @@ void write_tables(const std::string& out, const std::vector<Row>& rows, const Op
     const HilRunResult& r = row.r;
     csv << row.strategy << "," << row.frequency << "," << row.w_v << "," << row.trial << ","
         << r.accumulated_cost << "," << r.rms_error << "," << r.solve_time_max_us / 1e3 << ","
-        << r.solve_time_median_us / 1e3 << "," << r.deadline_misses << ","
-        << r.mean_abs_pam_torque << "," << r.mean_abs_motor_torque << "," << r.motor_share()
-        << "," << r.theta_min << "," << r.theta_max << "," << r.within_stops << ","
-        << r.number(r.plant, "real_time_factor") << "\n";
+        << r.solve_time_median_us / 1e3 << "," << r.deadline_misses << "," << r.mean_abs_pam_torque
+        << "," << r.mean_abs_motor_torque << "," << r.motor_share() << "," << r.theta_min << ","
+        << r.theta_max << "," << r.within_stops << "," << r.number(r.plant, "real_time_factor")
+        << "\n";
   }
 
   std::ostringstream md;
@@ -221,17 +222,19 @@ void write_tables(const std::string& out, const std::vector<Row>& rows, const Op
   char line[512];
   for (const Group& g : groups(rows)) {
     const Stats cost = group_stats(g, [](const HilRunResult& r) { return r.accumulated_cost; });
-    const Stats err = group_stats(g, [](const HilRunResult& r) { return r.rms_error * 180 / M_PI; });
-    const Stats max_solve = group_stats(g, [](const HilRunResult& r) { return r.solve_time_max_us / 1e3; });
+    const Stats err =
+        group_stats(g, [](const HilRunResult& r) { return r.rms_error * 180 / M_PI; });
+    const Stats max_solve =
+        group_stats(g, [](const HilRunResult& r) { return r.solve_time_max_us / 1e3; });
     const Stats median_solve =
         group_stats(g, [](const HilRunResult& r) { return r.solve_time_median_us / 1e3; });
     const Stats misses = group_stats(g, [](const HilRunResult& r) { return r.deadline_misses; });
     const Stats share = group_stats(g, [](const HilRunResult& r) { return r.motor_share(); });
-    std::snprintf(line, sizeof line,
-                  "| %.2f | %g | %s | %.1f +- %.1f | %.3f +- %.3f | %.2f | %.2f | %.0f | %.1f %% |\n",
-                  g.frequency, g.w_v > 0 ? g.w_v : 0.002, g.strategy.c_str(), cost.mean,
-                  cost.stddev, err.mean, err.stddev, max_solve.mean, median_solve.mean,
-                  misses.mean, 100 * share.mean);
+    std::snprintf(
+        line, sizeof line,
+        "| %.2f | %g | %s | %.1f +- %.1f | %.3f +- %.3f | %.2f | %.2f | %.0f | %.1f %% |\n",
+        g.frequency, g.w_v > 0 ? g.w_v : 0.002, g.strategy.c_str(), cost.mean, cost.stddev,
+        err.mean, err.stddev, max_solve.mean, median_solve.mean, misses.mean, 100 * share.mean);
     md << line;
   }
   double hil_load = 0, robot_load = 0, rtf = 0;
@@ -264,7 +267,8 @@ void write_bar_data(const std::string& path, const std::vector<Row>& rows, doubl
 }
 
 bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o) {
-  write_bar_data(out + "/hil_cost.dat", rows, 0, [](const HilRunResult& r) { return r.accumulated_cost; });
+  write_bar_data(out + "/hil_cost.dat", rows, 0,
+                 [](const HilRunResult& r) { return r.accumulated_cost; });
   write_bar_data(out + "/hil_error.dat", rows, 0,
                  [](const HilRunResult& r) { return r.rms_error * 180 / M_PI; });
   write_bar_data(out + "/hil_solve.dat", rows, 0,
@@ -276,8 +280,10 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
   const auto bars = [&](const char* file, const char* png, const char* title, const char* ylabel,
                         bool limit_line) {
     gp << "set output '" << out << "/" << png << "'\nset title '" << title << "'\nset ylabel '"
-       << ylabel << "'\nset xlabel 'target frequency (Hz)'\nset boxwidth 0.12\n"
-          "set style fill solid 0.6\nset yrange [0:*]\nset xrange [-0.5:" << o.frequencies.size() - 0.5 << "]\n"
+       << ylabel
+       << "'\nset xlabel 'target frequency (Hz)'\nset boxwidth 0.12\n"
+          "set style fill solid 0.6\nset yrange [0:*]\nset xrange [-0.5:"
+       << o.frequencies.size() - 0.5 << "]\n"
        << "set xtics (";
     for (std::size_t i = 0; i < o.frequencies.size(); ++i)
       gp << (i ? ", " : "") << "'" << o.frequencies[i] << "' " << i;
@@ -310,14 +316,16 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
     std::ostringstream png;
     png << out << "/hil_angle_" << f << "hz.png";
     gp << "set output '" << png.str() << "'\nset datafile separator ','\nset title 'Joint angle, "
-       << f << " Hz target, trial 1 (cf. Fig. 3.5)'\nset xlabel 'time (s)'\nset ylabel "
+       << f
+       << " Hz target, trial 1 (cf. Fig. 3.5)'\nset xlabel 'time (s)'\nset ylabel "
           "'angle (deg)'\nplot ";
     bool first = true;
     for (const char* s : {"fine_4ms", "coarse_20ms", "two_stage"}) {
       const std::string dir = run_dir(out, s, f, 0, 1);
       if (!std::filesystem::exists(dir + "/host.csv")) continue;
       if (first) {
-        gp << "'" << dir << "/host.csv' every ::1 using 1:($6*180/pi) with lines dt 2 lw 2 "
+        gp << "'" << dir
+           << "/host.csv' every ::1 using 1:($6*180/pi) with lines dt 2 lw 2 "
               "title 'target', ";
       }
       gp << "'" << dir << "/plant.csv' every ::1 using 1:($2*180/pi) with lines title '" << s
@@ -330,9 +338,13 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
   const double f_max = *std::max_element(o.frequencies.begin(), o.frequencies.end());
   const std::string two_stage = run_dir(out, "two_stage", f_max, 0, 1);
   if (std::filesystem::exists(two_stage + "/plant.csv")) {
-    gp << "set output '" << out << "/hil_torques.png'\nset datafile separator ','\n"
-          "set title 'Two-stage, " << f_max << " Hz: PAM and motor torque (cf. Fig. 3.9)'\n"
-          "set xlabel 'time (s)'\nset ylabel 'torque (N m)'\nplot '" << two_stage
+    gp << "set output '" << out
+       << "/hil_torques.png'\nset datafile separator ','\n"
+          "set title 'Two-stage, "
+       << f_max
+       << " Hz: PAM and motor torque (cf. Fig. 3.9)'\n"
+          "set xlabel 'time (s)'\nset ylabel 'torque (N m)'\nplot '"
+       << two_stage
        << "/plant.csv' every ::1 using 1:7 with lines title 'PAM', '' every ::1 using 1:8 with "
           "lines title 'motor'\n";
   }
@@ -346,7 +358,8 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
         data << g.strategy << " " << g.w_v << " " << s.mean << " " << s.stddev << "\n";
       }
     }
-    gp << "set output '" << out << "/hil_weight_sweep.png'\nset datafile separator ' '\n"
+    gp << "set output '" << out
+       << "/hil_weight_sweep.png'\nset datafile separator ' '\n"
           "set title 'Accumulated cost at 1 Hz for three voltage weights w_v (cf. Fig. 3.4)'\n"
           "set xlabel 'w_v'\nset logscale x\nset ylabel 'accumulated cost'\nplot ";
     const char* sweep[] = {"fine_4ms", "coarse_20ms", "two_stage"};
@@ -378,8 +391,8 @@ int main(int argc, char** argv) {
       for (long trial = 1; trial <= o.trials; ++trial) rows.push_back({name(s), f, 0, trial, {}});
   if (o.weight_sweep) {
     for (double w_v : kSweepWeights)
-      for (proto::Strategy s : {proto::Strategy::kFine4ms, proto::Strategy::kCoarse20ms,
-                                proto::Strategy::kTwoStage})
+      for (proto::Strategy s :
+           {proto::Strategy::kFine4ms, proto::Strategy::kCoarse20ms, proto::Strategy::kTwoStage})
         for (long trial = 1; trial <= o.trials; ++trial)
           rows.push_back({name(s), 1.0, w_v, trial, {}});
   }
@@ -409,12 +422,13 @@ int main(int argc, char** argv) {
         failed = true;
         return;
       }
-      std::printf("%s: %-12s %5.2f Hz w_v %-6g trial %ld: cost %8.1f  RMS %.3f deg  max solve "
-                  "%.2f ms  misses %.0f  motor share %.1f %%  plant RTF %.2f\n",
-                  kProgram, row.strategy.c_str(), row.frequency, row.w_v > 0 ? row.w_v : 0.002,
-                  row.trial, row.r.accumulated_cost, row.r.rms_error * 180 / M_PI,
-                  row.r.solve_time_max_us / 1e3, row.r.deadline_misses,
-                  100 * row.r.motor_share(), row.r.number(row.r.plant, "real_time_factor"));
+      std::printf(
+          "%s: %-12s %5.2f Hz w_v %-6g trial %ld: cost %8.1f  RMS %.3f deg  max solve "
+          "%.2f ms  misses %.0f  motor share %.1f %%  plant RTF %.2f\n",
+          kProgram, row.strategy.c_str(), row.frequency, row.w_v > 0 ? row.w_v : 0.002, row.trial,
+          row.r.accumulated_cost, row.r.rms_error * 180 / M_PI, row.r.solve_time_max_us / 1e3,
+          row.r.deadline_misses, 100 * row.r.motor_share(),
+          row.r.number(row.r.plant, "real_time_factor"));
       std::fflush(stdout);
     }
   };
@@ -424,8 +438,10 @@ int main(int argc, char** argv) {
   if (failed) return 1;
   write_tables(o.out, rows, o);
   if (!plot(o.out, rows, o)) {
-    std::fprintf(stderr, "%s: gnuplot failed (see %s/hil_plots.log); install it with "
-                 "toolchains/setup-debian.sh\n", kProgram, o.out.c_str());
+    std::fprintf(stderr,
+                 "%s: gnuplot failed (see %s/hil_plots.log); install it with "
+                 "toolchains/setup-debian.sh\n",
+                 kProgram, o.out.c_str());
     return 1;
   }
   std::printf("%s: wrote %s/hil_runs.csv, hil_summary.md and the hil_*.png plots\n", kProgram,

@@ -125,8 +125,10 @@ proto::Strategy strategy_of(const Options& o) {
   if (o.raw_sample) {
     return static_cast<proto::Strategy>(integer("--strategy", o.strategy, 0, 255));
   }
-  throw ArgumentError{"--strategy must be one of fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, "
-                      "two_stage, pam_only, got '" + o.strategy + "'"};
+  throw ArgumentError{
+      "--strategy must be one of fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, "
+      "two_stage, pam_only, got '" +
+      o.strategy + "'"};
 }
 
 Options parse(int argc, char** argv) {
@@ -237,24 +239,26 @@ int watch(const Options& o, const std::string& config) {
   const auto print_state = [&](const dds::ForearmStateSample& s) {
     if (s.node != o.node || printed >= o.samples) return;
     ++printed;
-    std::printf("state     node %u t %.3f s mode %s faults 0x%02x strategy %s theta %.4f rad "
-                "theta_dot %.4f rad/s P %.4f MPa theta_d %.4f rad v_p %.3f V v_m %.3f V "
-                "tau_p %.3f N.m tau_m %.3f N.m rejected %u watchdog %u solver failures %u "
-                "overruns %u\n",
-                unsigned{s.node}, s.board_time_s, name_of(proto::kBoardModeValues, unsigned(s.mode)),
-                unsigned{s.faults}, name_of(proto::kStrategyValues, unsigned(s.strategy)), s.theta, s.theta_dot, s.pressure_mpa, s.theta_d, s.v_p,
-                s.v_m, s.tau_p, s.tau_m, unsigned{s.rejected_frames}, unsigned{s.watchdog_trips},
-                unsigned{s.solver_failures}, unsigned{s.overruns});
+    std::printf(
+        "state     node %u t %.3f s mode %s faults 0x%02x strategy %s theta %.4f rad "
+        "theta_dot %.4f rad/s P %.4f MPa theta_d %.4f rad v_p %.3f V v_m %.3f V "
+        "tau_p %.3f N.m tau_m %.3f N.m rejected %u watchdog %u solver failures %u "
+        "overruns %u\n",
+        unsigned{s.node}, s.board_time_s, name_of(proto::kBoardModeValues, unsigned(s.mode)),
+        unsigned{s.faults}, name_of(proto::kStrategyValues, unsigned(s.strategy)), s.theta,
+        s.theta_dot, s.pressure_mpa, s.theta_d, s.v_p, s.v_m, s.tau_p, s.tau_m,
+        unsigned{s.rejected_frames}, unsigned{s.watchdog_trips}, unsigned{s.solver_failures},
+        unsigned{s.overruns});
   };
   const auto print_telemetry = [&](const dds::ForearmTelemetrySample& t) {
     if (t.node != o.node || printed >= o.samples) return;
     ++printed;
-    std::printf("telemetry node %u t %.3f s status %s coarse iterations %u fine iterations %u "
-                "solve %u us tracking error %.4f rad\n",
-                unsigned{t.node}, t.time_s,
-                name_of(proto::kSolveStatusValues, unsigned(t.solve_status)),
-                unsigned{t.coarse_iterations}, unsigned{t.fine_iterations},
-                unsigned{t.solve_time_us}, t.tracking_error);
+    std::printf(
+        "telemetry node %u t %.3f s status %s coarse iterations %u fine iterations %u "
+        "solve %u us tracking error %.4f rad\n",
+        unsigned{t.node}, t.time_s, name_of(proto::kSolveStatusValues, unsigned(t.solve_status)),
+        unsigned{t.coarse_iterations}, unsigned{t.fine_iterations}, unsigned{t.solve_time_us},
+        t.tracking_error);
   };
   while (printed < o.samples) {
     if (!client.wait_for_data(o.timeout_s)) {

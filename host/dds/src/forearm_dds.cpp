@@ -21,17 +21,17 @@ namespace {
 
 // ------------------------------------------------------------------------ checking commands
 
-std::string format(const char* pattern, double a, double b = 0, double c = 0, double d = 0) {
+template <class... Numbers>
+std::string format(const char* pattern, Numbers... numbers) {
   char text[256];
-  std::snprintf(text, sizeof text, pattern, a, b, c, d);
+  std::snprintf(text, sizeof text, pattern, double(numbers)...);
   return text;
 }
 
 ValidationResult reject(std::string reason) { return {false, std::move(reason)}; }
 
 // Empty when value is finite and in [min, max].
-std::string check_range(const char* field, double value, double min, double max,
-                        const char* unit) {
+std::string check_range(const char* field, double value, double min, double max, const char* unit) {
   if (!std::isfinite(value)) return std::string(field) + format(" is not finite (%g)", value);
   if (value < min || value > max) {
     return std::string(field) + format(" %g is outside %g..%g ", value, min, max) + unit;
@@ -112,8 +112,8 @@ class Participant {
     handle_ = dds_create_participant(domain_id, nullptr, nullptr);
     if (handle_ < 0) {
       DomainRegistry::instance().release(domain_id);
-      throw std::runtime_error(describe(
-          ("a DDS participant on domain " + std::to_string(domain_id)).c_str(), handle_));
+      throw std::runtime_error(
+          describe(("a DDS participant on domain " + std::to_string(domain_id)).c_str(), handle_));
     }
     qos_ = dds_create_qos();
     // Reliable with a short keep-last history: a write never blocks the control loop, and a
@@ -302,9 +302,10 @@ ValidationResult validate(const ForearmCommandSample& command) {
   }
   const auto strategy = static_cast<unsigned>(command.strategy);
   if (strategy > static_cast<unsigned>(proto::Strategy::kPamOnly)) {
-    return reject(format("strategy %g is not one of 0..5 (fine 4 ms, fine 8 ms, coarse 20 ms, "
-                         "coarse 40 ms, two-stage, PAM-only)",
-                         strategy));
+    return reject(
+        format("strategy %g is not one of 0..5 (fine 4 ms, fine 8 ms, coarse 20 ms, "
+               "coarse 40 ms, two-stage, PAM-only)",
+               strategy));
   }
   const CommandTarget& target = command.target;
   const auto kind = static_cast<unsigned>(target.kind);
@@ -312,8 +313,7 @@ ValidationResult validate(const ForearmCommandSample& command) {
     return reject(format("target.kind %g is not hold-current (0) or sinusoid (1)", kind));
   }
   const std::string problem[] = {
-      check_range("target.amplitude_rad", target.amplitude_rad, 0, limits.max_amplitude_rad,
-                  "rad"),
+      check_range("target.amplitude_rad", target.amplitude_rad, 0, limits.max_amplitude_rad, "rad"),
       check_range("target.frequency_hz", target.frequency_hz, 0, limits.max_frequency_hz, "Hz"),
       check_range("target.offset_rad", target.offset_rad, -limits.max_abs_offset_rad,
                   limits.max_abs_offset_rad, "rad"),
@@ -325,9 +325,10 @@ ValidationResult validate(const ForearmCommandSample& command) {
   const double low = target.offset_rad - target.amplitude_rad;
   const double high = target.offset_rad + target.amplitude_rad;
   if (low < limits.theta_min_rad || high > limits.theta_max_rad) {
-    return reject(format("target.offset_rad +- target.amplitude_rad spans %g..%g rad, beyond the "
-                         "board's software joint limits %g..%g rad",
-                         low, high, limits.theta_min_rad, limits.theta_max_rad));
+    return reject(
+        format("target.offset_rad +- target.amplitude_rad spans %g..%g rad, beyond the "
+               "board's software joint limits %g..%g rad",
+               low, high, limits.theta_min_rad, limits.theta_max_rad));
   }
   return {};
 }
@@ -351,8 +352,8 @@ std::string loopback_config() {
 struct ForearmDdsBridge::Impl {
   Impl(std::uint32_t domain_id, proto::NodeId node_id, const std::string& config)
       : node(node_id), participant(domain_id, config),
-        state_writer(participant.writer(
-            participant.topic(hmpc_dds_ForearmState_desc, kStateTopic), kStateTopic)),
+        state_writer(participant.writer(participant.topic(hmpc_dds_ForearmState_desc, kStateTopic),
+                                        kStateTopic)),
         telemetry_writer(participant.writer(
             participant.topic(hmpc_dds_ForearmTelemetry_desc, kTelemetryTopic), kTelemetryTopic)),
         command_reader(participant.reader(
@@ -401,8 +402,7 @@ std::size_t ForearmDdsBridge::poll_commands(const CommandHandler& handler) {
     if (!check.ok) {
       ++impl_->rejected;
       std::fprintf(stderr, "hmpc-forearm-dds: node %u rejected command %u: %s\n",
-                   unsigned{impl_->node}, unsigned{command.sequence_number},
-                   check.reason.c_str());
+                   unsigned{impl_->node}, unsigned{command.sequence_number}, check.reason.c_str());
       return;
     }
     ++accepted;
@@ -422,8 +422,8 @@ struct ForearmDdsClient::Impl {
       : participant(domain_id, config),
         command_writer(participant.writer(
             participant.topic(hmpc_dds_ForearmCommand_desc, kCommandTopic), kCommandTopic)),
-        state_reader(participant.reader(
-            participant.topic(hmpc_dds_ForearmState_desc, kStateTopic), kStateTopic)),
+        state_reader(participant.reader(participant.topic(hmpc_dds_ForearmState_desc, kStateTopic),
+                                        kStateTopic)),
         telemetry_reader(participant.reader(
             participant.topic(hmpc_dds_ForearmTelemetry_desc, kTelemetryTopic), kTelemetryTopic)),
         waitset(checked(dds_create_waitset(participant.handle()), "DDS waitset")) {

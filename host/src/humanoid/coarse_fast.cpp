@@ -9,8 +9,9 @@ IlqrConfig<double> layer_solver(const Motion& motion) {
 }
 
 template <int A>
-std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion, const BasicState<A>& initial,
-                                                     ThreadPool* pool, ProblemConfig config) {
+std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
+                                                     const BasicState<A>& initial, ThreadPool* pool,
+                                                     ProblemConfig config) {
   using CoarseFast = BasicCoarseFast<A>;
   config = model_config(motion, config);
   ProblemConfig coarse = config, fast = config;
@@ -22,8 +23,9 @@ std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion, const
   mpc.state_hold = CoarseFast::Config::StateHold::kLinear;
   mpc.upper = layer_solver(motion);
   mpc.fast = mpc.upper;
-  return std::make_unique<CoarseFast>(HumanoidProblem<kCoarseHorizon, A>(motion, initial, coarse, pool),
-                                      FastSubsystem<kFastHorizon, A>(motion.weights, fast, pool), mpc);
+  return std::make_unique<CoarseFast>(
+      HumanoidProblem<kCoarseHorizon, A>(motion, initial, coarse, pool),
+      FastSubsystem<kFastHorizon, A>(motion.weights, fast, pool), mpc);
 }
 
 template std::unique_ptr<BasicCoarseFast<0>> make_coarse_fast(const Motion&, const BasicState<0>&,

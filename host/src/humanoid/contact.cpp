@@ -26,8 +26,9 @@ Matrix3 skew(const Vector3& x) {
 }  // namespace
 
 template <int A>
-BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model, const BasicKinematics<A>& kinematics,
-                                     int body, const Vector3& local) {
+BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model,
+                                     const BasicKinematics<A>& kinematics, int body,
+                                     const Vector3& local) {
   using PointJacobian = BasicPointJacobian<A>;
   // Base columns from p_dot = R (v_o + omega x (p - p_0)_torso); joint columns
   // (R_b axis_b) x (p - p_b) for every joint b between the torso and the body.
@@ -36,7 +37,8 @@ BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model, const BasicKine
   J.template leftCols<3>() = -skew(p - kinematics.position[0]) * kinematics.rotation[0];
   J.template middleCols<3>(3) = kinematics.rotation[0];
   for (int b = body; b > 0; b = model.bodies[b].parent) {
-    J.col(kBaseDofs + b - 1) = (kinematics.rotation[b] * model.bodies[b].axis).cross(p - kinematics.position[b]);
+    J.col(kBaseDofs + b - 1) =
+        (kinematics.rotation[b] * model.bodies[b].axis).cross(p - kinematics.position[b]);
   }
   return J;
 }
@@ -84,17 +86,17 @@ double BasicContactModel<A>::seat_window(double x) const {
 
 template <int A>
 Vector3 BasicContactModel<A>::point_force(double gap, const Vector3& velocity, double scale,
-                                  Matrix3* dforce) const {
+                                          Matrix3* dforce) const {
   const ContactParameters& c = contact_;
   const double s = c.smoothing, eps = c.clamp_smoothing;
-  const double depth = s * softplus(-gap / s);                       // (C1)
-  const double rate_factor = 1.0 - c.damping * velocity.z();         // 1 + c delta_dot
-  const double clamp = eps * softplus(rate_factor / eps);            // g
-  const double normal = scale * c.stiffness * depth * clamp;         // (C2)
+  const double depth = s * softplus(-gap / s);                // (C1)
+  const double rate_factor = 1.0 - c.damping * velocity.z();  // 1 + c delta_dot
+  const double clamp = eps * softplus(rate_factor / eps);     // g
+  const double normal = scale * c.stiffness * depth * clamp;  // (C2)
   const Eigen::Vector2d slip = velocity.head<2>();
   const double slip_norm = std::sqrt(slip.squaredNorm() + c.slip_velocity * c.slip_velocity);
   Vector3 force;
-  force.head<2>() = -c.friction * normal / slip_norm * slip;          // (C3)
+  force.head<2>() = -c.friction * normal / slip_norm * slip;  // (C3)
   force.z() = normal;
   if (dforce != nullptr) {
     dforce->setZero();
@@ -117,7 +119,7 @@ void BasicContactModel<A>::evaluate(const Kinematics& kinematics, const Velocity
 
 template <int A>
 void BasicContactModel<A>::evaluate_point(int i, const Kinematics& kinematics, const Velocity& v,
-                                  ContactState& out) const {
+                                          ContactState& out) const {
   const ContactPoint& point = points_[i];
   const Vector3 p = kinematics.position[point.body] + kinematics.rotation[point.body] * point.local;
   out.jacobian[i] = point_jacobian(model_, kinematics, point.body, point.local);
@@ -128,7 +130,7 @@ void BasicContactModel<A>::evaluate_point(int i, const Kinematics& kinematics, c
 
 template <int A>
 Vector3 BasicContactModel<A>::force_at(int i, const Vector3& position, const Vector3& velocity,
-                               Matrix3& dforce) const {
+                                       Matrix3& dforce) const {
   const bool seat = i >= kSolePoints;
   const double gap = seat ? position.z() - contact_.seat_height : position.z();
   const double scale = seat ? seat_window(position.x()) : 1.0;
@@ -146,14 +148,16 @@ bool BasicContactModel<A>::moves_with(int i, int body) const {
 template <int A>
 BasicVelocity<A> BasicContactModel<A>::generalized_force(const ContactState& state) {
   Velocity tau = Velocity::Zero();
-  for (int i = 0; i < state.count; ++i) tau.noalias() += state.jacobian[i].transpose() * state.force[i];
+  for (int i = 0; i < state.count; ++i)
+    tau.noalias() += state.jacobian[i].transpose() * state.force[i];
   return tau;
 }
 
 template <int A>
 VerticalLoad vertical_load(const BasicContactState<A>& state) {
   VerticalLoad load;
-  for (int i = 0; i < state.count; ++i) (i < kSolePoints ? load.sole : load.seat) += state.force[i].z();
+  for (int i = 0; i < state.count; ++i)
+    (i < kSolePoints ? load.sole : load.seat) += state.force[i].z();
   return load;
 }
 

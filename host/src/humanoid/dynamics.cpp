@@ -114,7 +114,8 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
   // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X.
   for (int i = 0; i < kBodies; ++i) composite_[i] = inertia_[i];
   for (int i = kBodies - 1; i > 0; --i) {
-    composite_[model_.bodies[i].parent] += transform_[i].transpose() * composite_[i] * transform_[i];
+    composite_[model_.bodies[i].parent] +=
+        transform_[i].transpose() * composite_[i] * transform_[i];
   }
   // Base block: S_0 = identity, so M_00 = I^c_0.
   mass_matrix_.template topLeftCorner<6, 6>() = composite_[0];
@@ -165,7 +166,8 @@ BasicVelocity<A> BasicDynamics<A>::inverse_dynamics(const Velocity& v, const Vel
                        cross_motion(velocity_[i], joint_velocity);
   }
   for (int i = 0; i < kBodies; ++i) {
-    force_[i] = inertia_[i] * acceleration_[i] + cross_force(velocity_[i], inertia_[i] * velocity_[i]);
+    force_[i] =
+        inertia_[i] * acceleration_[i] + cross_force(velocity_[i], inertia_[i] * velocity_[i]);
   }
   // Backward pass: tau_i = S_i^T f_i, f_parent += X_i^T f_i.
   Velocity tau;
@@ -191,7 +193,8 @@ BasicVelocity<A> BasicDynamics<A>::forward_dynamics(const Configuration& q, cons
 }
 
 template <int A>
-void BasicDynamics<A>::kinematics(const Configuration& q, const Velocity& v, Kinematics& out) const {
+void BasicDynamics<A>::kinematics(const Configuration& q, const Velocity& v,
+                                  Kinematics& out) const {
   std::array<Matrix3, kBodies> rotation;
   rotation[0] = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
   for (int i = 1; i < kBodies; ++i)
@@ -203,7 +206,8 @@ template <int A>
 void BasicDynamics<A>::kinematics(const Velocity& v, Kinematics& out) const {
   // The transforms hold E = the transposed rotations (set_configuration()).
   std::array<Matrix3, kBodies> rotation;
-  for (int i = 0; i < kBodies; ++i) rotation[i] = transform_[i].template topLeftCorner<3, 3>().transpose();
+  for (int i = 0; i < kBodies; ++i)
+    rotation[i] = transform_[i].template topLeftCorner<3, 3>().transpose();
   kinematics_from_rotations(model_, rotation, configuration_.template head<3>(), v, out);
 }
 

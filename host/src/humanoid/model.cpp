@@ -13,8 +13,8 @@ struct MassPoint {
 
 // Principal central inertia of a segment of length `length` from de Leva's radii of gyration;
 // `sagittal`, `transverse`, `longitudinal` name the body axes (0 = x, 1 = y, 2 = z) they lie on.
-Matrix3 segment_inertia(const Segment& s, double mass, double length, int sagittal,
-                        int transverse, int longitudinal) {
+Matrix3 segment_inertia(const Segment& s, double mass, double length, int sagittal, int transverse,
+                        int longitudinal) {
   Matrix3 inertia = Matrix3::Zero();
   const auto square = [](double r) { return r * r; };
   inertia(sagittal, sagittal) = mass * square(s.gyration_sagittal * length);
@@ -35,7 +35,8 @@ MassPoint lump(const std::array<MassPoint, N>& parts) {
   sum.com /= sum.mass;
   for (const auto& part : parts) {
     const Vector3 d = part.com - sum.com;
-    sum.inertia += part.inertia + part.mass * (d.squaredNorm() * Matrix3::Identity() - d * d.transpose());
+    sum.inertia +=
+        part.inertia + part.mass * (d.squaredNorm() * Matrix3::Identity() - d * d.transpose());
   }
   return sum;
 }
@@ -75,11 +76,13 @@ BasicModel<ArmJoints>::BasicModel(const Parameters& p) {
                                     vertical(p.forearm, shoulder_z - upper_arm, y),
                                     vertical(p.hand, shoulder_z - upper_arm - forearm, y)};
   };
-  const std::array<MassPoint, 3> left_arm = arm_parts(shoulder_y), right_arm = arm_parts(-shoulder_y);
+  const std::array<MassPoint, 3> left_arm = arm_parts(shoulder_y),
+                                 right_arm = arm_parts(-shoulder_y);
   std::array<MassPoint, 8 - 3 * ArmJoints> torso_parts{vertical(p.trunk, trunk, 0.0),
                                                        vertical(p.head, trunk + head, 0.0)};
   for (int k = 0; k < 3; ++k) torso_parts[2 + k] = left_arm[k];
   if constexpr (ArmJoints == 0) {
+    // cppcheck-suppress containerOutOfBounds ; it also reads this branch for the arm's 5 parts
     for (int k = 0; k < 3; ++k) torso_parts[5 + k] = right_arm[k];
   }
   const MassPoint torso = lump(torso_parts);

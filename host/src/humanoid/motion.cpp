@@ -25,10 +25,10 @@ const std::map<std::string, std::vector<KeySpec>>& section_keys() {
   static const std::map<std::string, std::vector<KeySpec>> keys{
       {"motion", {{"duration", 1}, {"chair", 3}, {"gait", 3}, {"model_substep", 1, true}}},
       {"weights",
-       {{"w_HAA", 1}, {"w_HFE", 1}, {"w_KFE", 1}, {"w_AFE", 1}, {"w_q1", 1}, {"w_q2", 1},
-        {"w_q3", 1}, {"w_q4", 1}, {"w_height", 1}, {"w_vx", 1}, {"w_vy", 1}, {"w_vz", 1},
-        {"w_alpha", 1}, {"w_beta", 1}, {"w_omega_x", 1}, {"w_omega_y", 1}, {"w_omega_z", 1},
-        {"w_fast", 1}, {"w_fast_control", 1}, {"w_foot", 1}}},
+       {{"w_HAA", 1},     {"w_HFE", 1},     {"w_KFE", 1},   {"w_AFE", 1},          {"w_q1", 1},
+        {"w_q2", 1},      {"w_q3", 1},      {"w_q4", 1},    {"w_height", 1},       {"w_vx", 1},
+        {"w_vy", 1},      {"w_vz", 1},      {"w_alpha", 1}, {"w_beta", 1},         {"w_omega_x", 1},
+        {"w_omega_y", 1}, {"w_omega_z", 1}, {"w_fast", 1},  {"w_fast_control", 1}, {"w_foot", 1}}},
       {"phase", {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}}},
       {"reach", {{"target", 3}, {"start", 1}, {"w_reach", 1}, {"w_SFE", 1}}},
   };
@@ -89,8 +89,9 @@ class Reader {
     for (const KeySpec& spec : section_keys().at(section.name))
       if (key == spec.name) size = spec.size;
     if (static_cast<int>(values.size()) != size) {
-      fail(entry.line, key, "expected " + std::to_string(size) + (size == 1 ? " number" : " numbers") +
-                                ", got '" + entry.text + "'");
+      fail(entry.line, key,
+           "expected " + std::to_string(size) + (size == 1 ? " number" : " numbers") + ", got '" +
+               entry.text + "'");
     }
     return values;
   }
@@ -121,8 +122,8 @@ class Reader {
       if (text.empty()) continue;
       if (!version_seen) {
         if (text != kVersionLine)
-          fail(line_number, "", "expected the version line '" + std::string(kVersionLine) +
-                                    "', got '" + text + "'");
+          fail(line_number, "",
+               "expected the version line '" + std::string(kVersionLine) + "', got '" + text + "'");
         version_seen = true;
         continue;
       }
@@ -137,7 +138,8 @@ class Reader {
         continue;
       }
       const auto equals = text.find('=');
-      if (equals == std::string::npos) fail(line_number, "", "expected 'key = value', got '" + text + "'");
+      if (equals == std::string::npos)
+        fail(line_number, "", "expected 'key = value', got '" + text + "'");
       const std::string key = trim(text.substr(0, equals));
       const std::string value = trim(text.substr(equals + 1));
       if (key.empty()) fail(line_number, "", "missing key before '='");
@@ -148,12 +150,14 @@ class Reader {
       if (!known) fail(line_number, key, "unknown key in [" + section.name + "]");
       if (value.empty()) fail(line_number, key, "missing value");
       if (!section.entries.emplace(key, Entry{line_number, value}).second) {
-        fail(line_number, key, "duplicate key (first set on line " +
-                                   std::to_string(section.entries.at(key).line) + ")");
+        fail(line_number, key,
+             "duplicate key (first set on line " + std::to_string(section.entries.at(key).line) +
+                 ")");
       }
     }
-    if (!version_seen) fail(line_number, "", "empty file: expected the version line '" +
-                                                 std::string(kVersionLine) + "'");
+    if (!version_seen)
+      fail(line_number, "",
+           "empty file: expected the version line '" + std::string(kVersionLine) + "'");
     for (const Section& section : sections) {
       for (const KeySpec& spec : section_keys().at(section.name)) {
         if (!spec.optional && section.entries.count(spec.name) == 0)
@@ -177,8 +181,9 @@ class Reader {
 
 const Phase& Motion::phase_at(double t) const {
   // The first phase after t, by bisection: a demonstration's motion has one phase per step.
-  const auto later = std::upper_bound(phases.begin() + 1, phases.begin() + std::max(1, phase_count), t,
-                                      [](double time, const Phase& phase) { return time < phase.start; });
+  const auto later =
+      std::upper_bound(phases.begin() + 1, phases.begin() + std::max(1, phase_count), t,
+                       [](double time, const Phase& phase) { return time < phase.start; });
   return *(later - 1);
 }
 
@@ -208,7 +213,8 @@ Motion parse_motion(std::istream& in, const std::string& source) {
       if (motion.phase_count == 0 && phase.start != 0.0)
         reader.fail(start_line, "start", "the first phase must start at 0");
       if (motion.phase_count > 0 && phase.start <= motion.phases[motion.phase_count - 1].start)
-        reader.fail(start_line, "start", "phases out of order: must start after the previous phase");
+        reader.fail(start_line, "start",
+                    "phases out of order: must start after the previous phase");
       phase.attitude = reader.vector3(section, "attitude");
       phase.height = reader.scalar(section, "height");
       phase.velocity = reader.vector3(section, "velocity");
@@ -219,8 +225,9 @@ Motion parse_motion(std::istream& in, const std::string& source) {
                            : section.name == "weights" ? weights_section
                                                        : reach_section;
     if (slot != nullptr) {
-      reader.fail(section.line, "", "section [" + section.name + "] repeated (first on line " +
-                                        std::to_string(slot->line) + ")");
+      reader.fail(section.line, "",
+                  "section [" + section.name + "] repeated (first on line " +
+                      std::to_string(slot->line) + ")");
     }
     slot = &section;
   }
@@ -264,8 +271,8 @@ Motion parse_motion(std::istream& in, const std::string& source) {
 
   const Section& w = *weights_section;
   CostWeights& weights = motion.weights;
-  weights.control = {reader.weight(w, "w_HAA"), reader.weight(w, "w_HFE"), reader.weight(w, "w_KFE"),
-                     reader.weight(w, "w_AFE")};
+  weights.control = {reader.weight(w, "w_HAA"), reader.weight(w, "w_HFE"),
+                     reader.weight(w, "w_KFE"), reader.weight(w, "w_AFE")};
   // Element by element: a missing key throws, which must not leave an Eigen comma
   // initializer half done, and keys are reported in file order.
   for (int i = 0; i < 4; ++i) weights.attitude(i) = reader.weight(w, "w_q" + std::to_string(i + 1));
@@ -295,7 +302,8 @@ Motion parse_motion(std::istream& in, const std::string& source) {
 }
 
 std::string motion_path(const std::string& name_or_path, const std::string& shipped_dir) {
-  if (name_or_path.find('/') != std::string::npos || name_or_path.find(".motion") != std::string::npos) {
+  if (name_or_path.find('/') != std::string::npos ||
+      name_or_path.find(".motion") != std::string::npos) {
     return name_or_path;
   }
   return shipped_dir + "/" + name_or_path + ".motion";
@@ -315,13 +323,15 @@ void write_motion(std::ostream& out, const Motion& motion, const std::string& co
   const CostWeights& w = motion.weights;
   out << kVersionLine << "\n\n[motion]\nduration = " << number(motion.duration) << '\n';
   out << "chair = "
-      << (motion.chair ? number(motion.seat_height) + " " + number(motion.seat_x_min) + " " + number(motion.seat_x_max)
+      << (motion.chair ? number(motion.seat_height) + " " + number(motion.seat_x_min) + " " +
+                             number(motion.seat_x_max)
                        : std::string("none"))
       << '\n';
   out << "gait = "
-      << (motion.gait.period > 0.0 ? number(motion.gait.period) + " " + number(motion.gait.swing_height) + " " +
-                                         number(motion.gait.swing_fraction)
-                                   : std::string("none"))
+      << (motion.gait.period > 0.0
+              ? number(motion.gait.period) + " " + number(motion.gait.swing_height) + " " +
+                    number(motion.gait.swing_fraction)
+              : std::string("none"))
       << '\n';
   if (motion.model_substep > 0.0) out << "model_substep = " << number(motion.model_substep) << '\n';
   out << "\n[weights]\n";
@@ -332,7 +342,8 @@ void write_motion(std::ostream& out, const Motion& motion, const std::string& co
   const char* const axes[] = {"x", "y", "z"};
   for (int i = 0; i < 3; ++i) out << "w_v" << axes[i] << " = " << number(w.velocity[i]) << '\n';
   out << "w_alpha = " << number(w.alpha) << "\nw_beta = " << number(w.beta) << '\n';
-  for (int i = 0; i < 3; ++i) out << "w_omega_" << axes[i] << " = " << number(w.angular_velocity[i]) << '\n';
+  for (int i = 0; i < 3; ++i)
+    out << "w_omega_" << axes[i] << " = " << number(w.angular_velocity[i]) << '\n';
   out << "w_fast = " << number(w.fast) << "\nw_fast_control = " << number(w.fast_control)
       << "\nw_foot = " << number(w.foot) << '\n';
   for (int k = 0; k < motion.phase_count; ++k) {
@@ -341,8 +352,10 @@ void write_motion(std::ostream& out, const Motion& motion, const std::string& co
         << "\nheight = " << number(p.height) << "\nvelocity = " << vector3(p.velocity) << '\n';
   }
   if (motion.reach.active) {
-    out << "\n[reach]\ntarget = " << vector3(motion.reach.target) << "\nstart = " << number(motion.reach.start)
-        << "\nw_reach = " << number(motion.reach.weight) << "\nw_SFE = " << number(motion.reach.control) << '\n';
+    out << "\n[reach]\ntarget = " << vector3(motion.reach.target)
+        << "\nstart = " << number(motion.reach.start)
+        << "\nw_reach = " << number(motion.reach.weight)
+        << "\nw_SFE = " << number(motion.reach.control) << '\n';
   }
 }
 

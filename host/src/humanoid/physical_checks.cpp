@@ -7,20 +7,23 @@
 namespace hmpc::humanoid {
 namespace {
 
-constexpr double kWeight = 47.0 * 9.81;        // m g [N], thesis Sec. 2.5.1
-constexpr double kUnloaded = 0.1 * kWeight;    // a foot's load below this: off the ground
-constexpr double kStandingHeight = 0.85;       // Table 2.2
+constexpr double kWeight = 47.0 * 9.81;      // m g [N], thesis Sec. 2.5.1
+constexpr double kUnloaded = 0.1 * kWeight;  // a foot's load below this: off the ground
+constexpr double kStandingHeight = 0.85;     // Table 2.2
 constexpr double kHeightBand = 0.05;
-constexpr double kSettle = 0.3;                // [s] the landing/standing window at the end
+constexpr double kSettle = 0.3;  // [s] the landing/standing window at the end
 constexpr double kPi = 3.14159265358979323846;
 
-std::string format(const char* pattern, double a = 0.0, double b = 0.0, double c = 0.0) {
+template <class... Numbers>
+std::string format(const char* pattern, Numbers... numbers) {
   char text[256];
-  std::snprintf(text, sizeof text, pattern, a, b, c);
+  std::snprintf(text, sizeof text, pattern, double(numbers)...);
   return text;
 }
 
-bool airborne(const ClosedLoopSample& s) { return s.left_force < kUnloaded && s.right_force < kUnloaded; }
+bool airborne(const ClosedLoopSample& s) {
+  return s.left_force < kUnloaded && s.right_force < kUnloaded;
+}
 
 // Longest run of consecutive samples with both feet unloaded, and how many such samples.
 void flight(const ClosedLoopRun& run, int& longest, int& total) {
@@ -104,7 +107,8 @@ PhysicalCheck locomotion(const Motion& motion, const ClosedLoopRun& run, bool ru
     return c;
   }
   const ClosedLoopSample& last = run.samples.back();
-  const double speed = (last.base.position.x() - start->base.position.x()) / (last.time - start->time);
+  const double speed =
+      (last.base.position.x() - start->base.position.x()) / (last.time - start->time);
   const std::string order = touchdowns(run);
   int alternations = 0;
   for (std::size_t i = 1; i < order.size(); ++i) alternations += order[i] != order[i - 1] ? 1 : 0;
@@ -150,7 +154,8 @@ PhysicalCheck jump(const ClosedLoopRun& run, double turn, double pitch_rotations
   int longest = 0, flying = 0;
   flight(run, longest, flying);
   PhysicalCheck c;
-  c.verdict = format("longest flight %.0f ms, apex %.3f m", longest * kSamplingPeriod * 1e3, apex_height(run));
+  c.verdict = format("longest flight %.0f ms, apex %.3f m", longest * kSamplingPeriod * 1e3,
+                     apex_height(run));
   bool passed = longest >= 2;
   if (turn != 0.0) {
     const double turned = std::abs(yaw(run.samples.back()));
@@ -159,7 +164,8 @@ PhysicalCheck jump(const ClosedLoopRun& run, double turn, double pitch_rotations
   }
   if (pitch_rotations != 0.0) {
     double pitch = 0.0;
-    for (const ClosedLoopSample& s : run.samples) pitch += s.base.angular_velocity.y() * kSamplingPeriod;
+    for (const ClosedLoopSample& s : run.samples)
+      pitch += s.base.angular_velocity.y() * kSamplingPeriod;
     const double required = 2.0 * kPi * pitch_rotations - 0.5;
     c.verdict += format(", pitch rotated %.2f rad (required >= %.2f)", pitch, required);
     passed = passed && pitch >= required;
@@ -173,7 +179,7 @@ PhysicalCheck jump(const ClosedLoopRun& run, double turn, double pitch_rotations
 
 std::string motion_numeral(const std::string& name) {
   const std::size_t dash = name.find('-');
-  const std::string numeral = name.substr(0, dash);
+  std::string numeral = name.substr(0, dash);
   for (const char* known : {"I", "II", "III", "IV", "V", "VI", "VII", "VIII"}) {
     if (numeral == known) return numeral;
   }
@@ -186,7 +192,8 @@ double apex_height(const ClosedLoopRun& run) {
   return apex;
 }
 
-PhysicalCheck check_motion(const std::string& numeral, const Motion& motion, const ClosedLoopRun& run) {
+PhysicalCheck check_motion(const std::string& numeral, const Motion& motion,
+                           const ClosedLoopRun& run) {
   if (run.samples.empty()) return {false, "no samples"};
   if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
   if (numeral == "I") return standing(run);
@@ -220,9 +227,12 @@ PhysicalCheck check_reaching(const Motion& motion, const ArmClosedLoopRun& run) 
   const ReachFigures f = reach_figures(motion, run);
   if (f.closest < 0.0) return {false, "the run ended before the reach started"};
   const std::string closest =
-      format("hand closest to the target %.3f m, %.2f s after the reach started", f.closest, f.closest_after);
-  if (f.within_after < 0.0) return {false, closest + format(" (required <= %.2f m)", kReachTolerance)};
-  return {true, closest + format("; first within %.2f m after %.2f s", kReachTolerance, f.within_after)};
+      format("hand closest to the target %.3f m, %.2f s after the reach started", f.closest,
+             f.closest_after);
+  if (f.within_after < 0.0)
+    return {false, closest + format(" (required <= %.2f m)", kReachTolerance)};
+  return {true,
+          closest + format("; first within %.2f m after %.2f s", kReachTolerance, f.within_after)};
 }
 
 }  // namespace hmpc::humanoid

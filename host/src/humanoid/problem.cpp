@@ -17,7 +17,8 @@ double leg_angle(const Vector3& d, int axis) { return std::atan2(d[axis], -d.z()
 }  // namespace
 
 template <int A>
-BasicStateCost<A>::BasicStateCost(const Motion& motion, const State& initial, const ProblemConfig& config)
+BasicStateCost<A>::BasicStateCost(const Motion& motion, const State& initial,
+                                  const ProblemConfig& config)
     : motion_(motion), base_point_(config.base_point), dynamics_(BasicModel<A>(config.parameters)) {
   if (motion.reach.active != (A == 1)) {
     throw std::invalid_argument(motion.reach.active
@@ -66,7 +67,7 @@ BaseFeatures BasicStateCost<A>::features(const State& x) const {
 
 template <int A>
 typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const StateVector& x,
-                                                                      double time) const {
+                                                                     double time) const {
   const BaseFeatures f = features(to_state<A>(x));
   const Phase& target = motion_.phase_at(time);
   const CostWeights& w = motion_.weights;
@@ -75,12 +76,14 @@ typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const State
   const Eigen::Vector4d dq = f.quaternion - attitude_quaternion(target.attitude);
   r.template segment<3>(0) = w.attitude.head<3>().cwiseSqrt().cwiseProduct(dq.tail<3>());
   r[3] = std::sqrt(w.attitude[3]) * dq[0];
-  r[4] = std::sqrt(w.height) * (f.position.z() - target.height);                       // Eq. 4.26
-  r.template segment<3>(5) = w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity);  // Eq. 4.27
-  r[8] = std::sqrt(w.alpha) * (f.alpha_right - f.alpha_left);                           // Eq. 4.28
-  r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);                         // Eq. 4.29
+  r[4] = std::sqrt(w.height) * (f.position.z() - target.height);  // Eq. 4.26
+  r.template segment<3>(5) =
+      w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity);  // Eq. 4.27
+  r[8] = std::sqrt(w.alpha) * (f.alpha_right - f.alpha_left);             // Eq. 4.28
+  r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);           // Eq. 4.29
   r[10] = std::sqrt(w.beta) * (f.beta_left - beta_left_init_);
-  r.template segment<3>(11) = w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);   // Eq. 4.30
+  r.template segment<3>(11) =
+      w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);  // Eq. 4.30
   for (int k = 0; k < 4; ++k) {  // foot heights, heel and toe of each sole (Gait, motion.hpp)
     r[14 + k] = std::sqrt(w.foot) * (f.sole_height[k] - motion_.gait.foot_height(time, k / 2));
   }
@@ -96,7 +99,8 @@ typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const State
 }
 
 template <int A>
-void BasicStateCost<A>::residual_jacobian(const StateVector& x, double time, ResidualJacobian& J) const {
+void BasicStateCost<A>::residual_jacobian(const StateVector& x, double time,
+                                          ResidualJacobian& J) const {
   // Central differences (finite_difference.hpp's step) in the entries r depends on: the base
   // height, quaternion and joint angles, and the torso's velocities. The horizontal base
   // position (it cancels from the leg angles) and the joint rates do not enter, so their
@@ -235,7 +239,7 @@ State biped_stance(const ProblemConfig& config, double height) {
 
 template <int A>
 BasicState<A> standing_state(const ProblemConfig& config, double height) {
-  const State biped = biped_stance(config, height);
+  State biped = biped_stance(config, height);
   if constexpr (A == 0) {
     return biped;
   } else {

@@ -29,7 +29,8 @@ void write_frame(std::ostream& out, const StickFigure& f, const Motion& motion) 
   write_point(out, f.hip[1], centre);
   out << '\n';
   for (int leg = 0; leg < 2; ++leg) {
-    for (const Vector3& p : {f.hip[leg], f.knee[leg], f.ankle[leg], f.heel[leg], f.toe[leg], f.ankle[leg]}) {
+    for (const Vector3& p :
+         {f.hip[leg], f.knee[leg], f.ankle[leg], f.heel[leg], f.toe[leg], f.ankle[leg]}) {
       write_point(out, p, centre);
     }
     out << '\n';
@@ -96,7 +97,8 @@ StickFigure stick_figure(const BasicState<A>& x, const ProblemConfig& config) {
 }
 
 template <int A>
-void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicClosedLoopRun<A>& run) {
+void write_trajectory_csv(std::ostream& out, const Motion& motion,
+                          const BasicClosedLoopRun<A>& run) {
   constexpr int kJoints = Dimensions<A>::kJoints;
   out << "time,base_x,base_y,base_z,base_vx,base_vy,base_vz,quat_w,quat_x,quat_y,quat_z,"
          "alpha_left,alpha_right,beta_left,beta_right";
@@ -115,9 +117,10 @@ void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicCl
   for (const BasicClosedLoopSample<A>& s : run.samples) {
     const BaseFeatures& b = s.base;
     out << s.time << ',' << b.position.x() << ',' << b.position.y() << ',' << b.position.z() << ','
-        << b.velocity.x() << ',' << b.velocity.y() << ',' << b.velocity.z() << ',' << b.quaternion[0]
-        << ',' << b.quaternion[1] << ',' << b.quaternion[2] << ',' << b.quaternion[3] << ','
-        << b.alpha_left << ',' << b.alpha_right << ',' << b.beta_left << ',' << b.beta_right;
+        << b.velocity.x() << ',' << b.velocity.y() << ',' << b.velocity.z() << ','
+        << b.quaternion[0] << ',' << b.quaternion[1] << ',' << b.quaternion[2] << ','
+        << b.quaternion[3] << ',' << b.alpha_left << ',' << b.alpha_right << ',' << b.beta_left
+        << ',' << b.beta_right;
     for (int i = 0; i < kJoints; ++i) out << ',' << s.state.q[7 + i];
     for (int i = 0; i < kJoints; ++i) out << ',' << s.torque[i];
     const Phase& target = motion.phase_at(s.time);
@@ -173,23 +176,31 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
   const fs::path script = base / "humanoid.gp";
   {
     std::ofstream gp(script);
-    gp << "# gnuplot " << script.filename().string() << " (in this directory) redraws the pictures\n"
+    gp << "# gnuplot " << script.filename().string()
+       << " (in this directory) redraws the pictures\n"
        << "set terminal pngcairo size " << 190 * frames << ",560 noenhanced\n"
        << "set output 'filmstrip.png'\n"
        << "times = '" << times << "'\n"
-       << "set multiplot layout 2," << frames << " title '" << title << " (side x-z above, front y-z below)'\n"
-       << "unset key\nset size ratio -1\nset xrange [-0.8:0.8]\nset yrange [-0.05:" << top + 0.1 << "]\n"
+       << "set multiplot layout 2," << frames << " title '" << title
+       << " (side x-z above, front y-z below)'\n"
+       << "unset key\nset size ratio -1\nset xrange [-0.8:0.8]\nset yrange [-0.05:" << top + 0.1
+       << "]\n"
        << "set xtics 0.4 font ',8'\nset ytics 0.5 font ',8'\n"
        << "do for [i=0:" << frames - 1 << "] { set title word(times, i+1).' s'; "
-       << "plot 'filmstrip.dat' index i using 1:3 with lines lw 2 lc rgb '#1f4e99', 0 lc rgb 'gray' }\n"
+       << "plot 'filmstrip.dat' index i using 1:3 with lines lw 2 lc rgb '#1f4e99', 0 lc rgb "
+          "'gray' }\n"
        << "do for [i=0:" << frames - 1 << "] { set title word(times, i+1).' s'; "
-       << "plot 'filmstrip.dat' index i using 2:3 with lines lw 2 lc rgb '#99321f', 0 lc rgb 'gray' }\n"
+       << "plot 'filmstrip.dat' index i using 2:3 with lines lw 2 lc rgb '#99321f', 0 lc rgb "
+          "'gray' }\n"
        << "unset multiplot\n"
-       << "set terminal pngcairo size 900," << (A == 1 ? 900 : 640) << " noenhanced\nset output 'base.png'\n"
+       << "set terminal pngcairo size 900," << (A == 1 ? 900 : 640)
+       << " noenhanced\nset output 'base.png'\n"
        << "set datafile separator ','\nset size noratio\nset autoscale\nunset title\n"
-       << "set xtics autofreq font ''\nset ytics autofreq font ''\nset key outside top center horizontal\n"
+       << "set xtics autofreq font ''\nset ytics autofreq font ''\nset key outside top center "
+          "horizontal\n"
        << "set multiplot layout " << (A == 1 ? 3 : 2) << ",1 title '" << title << "'\n"
-       << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:" << kHeightColumn << " with lines lw 2 title 'base point', "
+       << "set ylabel 'height [m]'\nplot 'trajectory.csv' using 1:" << kHeightColumn
+       << " with lines lw 2 title 'base point', "
        << "'' using 1:" << kTargetHeightColumn<A> << " with steps dt 2 title 'target'\n";
     if (A == 1) {
       // The hand's distance to the reach target, from the columns after target_yaw.
@@ -200,8 +211,10 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
       }
       gp << ")) with lines lw 2 title 'hand', " << kReachTolerance << " dt 2 title '5 cm'\n";
     }
-    gp << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:" << kVelocityColumn << " with lines lw 2 "
-       << "title 'base point', '' using 1:" << kTargetHeightColumn<A> + 1 << " with steps dt 2 title 'target'\n"
+    gp << "set xlabel 'time [s]'\nset ylabel 'v_x [m/s]'\nplot 'trajectory.csv' using 1:"
+       << kVelocityColumn << " with lines lw 2 "
+       << "title 'base point', '' using 1:" << kTargetHeightColumn<A> + 1
+       << " with steps dt 2 title 'target'\n"
        << "unset multiplot\n";
     if (!gp) return fail(error, "cannot write " + script.string());
   }

@@ -4,8 +4,10 @@
 
 namespace hmpc::ioc {
 
-std::vector<Demonstration> coarse_mpc_plans(const humanoid::Motion& motion, const humanoid::ClosedLoopRun& run,
-                                            const humanoid::ProblemConfig& problem, humanoid::ThreadPool* pool) {
+std::vector<Demonstration> coarse_mpc_plans(const humanoid::Motion& motion,
+                                            const humanoid::ClosedLoopRun& run,
+                                            const humanoid::ProblemConfig& problem,
+                                            humanoid::ThreadPool* pool) {
   using Problem = humanoid::HumanoidProblem<humanoid::kCoarseHorizon>;
   humanoid::ProblemConfig config = humanoid::model_config(motion, problem);
   config.step = humanoid::kCoarseStep;

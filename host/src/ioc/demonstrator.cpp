@@ -21,12 +21,15 @@ humanoid::Parameters demonstrator_parameters() {
 }
 
 double leg_length(const humanoid::Parameters& p) {
-  return p.stature - (p.head.reference_length + p.trunk.reference_length) * p.stature / p.reference_stature;
+  return p.stature -
+         (p.head.reference_length + p.trunk.reference_length) * p.stature / p.reference_stature;
 }
 
 double demonstrator_start_height() {
-  const double base_point = humanoid::ProblemConfig{}.base_point.z();  // above the hips, either body
-  return base_point + (humanoid::kStartHeight - base_point) * leg_length(demonstrator_parameters()) /
+  const double base_point =
+      humanoid::ProblemConfig{}.base_point.z();  // above the hips, either body
+  return base_point + (humanoid::kStartHeight - base_point) *
+                          leg_length(demonstrator_parameters()) /
                           leg_length(humanoid::Parameters{});
 }
 
@@ -50,7 +53,8 @@ humanoid::Motion with_timing(const humanoid::Motion& task, double spread, std::m
 std::vector<Capture> capture_demonstrations(
     const humanoid::Motion& task, const CaptureConfig& config,
     const std::function<void(int index, const humanoid::ClosedLoopRun& run)>& progress) {
-  if (config.count < 1 || config.count > 200) throw std::invalid_argument("captures: count must be in 1..200");
+  if (config.count < 1 || config.count > 200)
+    throw std::invalid_argument("captures: count must be in 1..200");
   if (!(config.timing_spread >= 0.0 && config.timing_spread < 0.5)) {
     throw std::invalid_argument("captures: the timing spread must be in [0, 0.5)");
   }
@@ -58,7 +62,8 @@ std::vector<Capture> capture_demonstrations(
     throw std::invalid_argument("captures: noise must be >= 0");
   }
   std::mt19937_64 rng(config.seed);
-  std::normal_distribution<double> angle(0.0, config.angle_noise), position(0.0, config.position_noise);
+  std::normal_distribution<double> angle(0.0, config.angle_noise),
+      position(0.0, config.position_noise);
   humanoid::ClosedLoopConfig run_config;
   run_config.mpc = humanoid::MpcKind::kCoarse;
   run_config.truncate = false;
@@ -71,8 +76,9 @@ std::vector<Capture> capture_demonstrations(
     humanoid::Configuration noisy = q;
     for (int i = 0; i < 3; ++i) noisy[i] += position(rng);
     const Eigen::Vector3d tilt(angle(rng), angle(rng), angle(rng));
-    const Eigen::Quaterniond error = tilt.norm() > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(tilt.norm(), tilt.normalized()))
-                                                        : Eigen::Quaterniond::Identity();
+    const Eigen::Quaterniond error =
+        tilt.norm() > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(tilt.norm(), tilt.normalized()))
+                          : Eigen::Quaterniond::Identity();
     const Eigen::Quaterniond attitude = Eigen::Quaterniond(q[3], q[4], q[5], q[6]) * error;
     noisy.segment<4>(3) << attitude.w(), attitude.x(), attitude.y(), attitude.z();
     noisy.segment<4>(3).normalize();
@@ -89,7 +95,8 @@ std::vector<Capture> capture_demonstrations(
     Capture capture;
     capture.poses.reserve(run.samples.size() + 1);
     capture.poses.push_back(captured(run.initial.q));
-    for (const humanoid::ClosedLoopSample& sample : run.samples) capture.poses.push_back(captured(sample.state.q));
+    for (const humanoid::ClosedLoopSample& sample : run.samples)
+      capture.poses.push_back(captured(sample.state.q));
     captures.push_back(std::move(capture));
   }
   return captures;

@@ -68,18 +68,29 @@ Weights parse_weights(std::istream& in, const std::string& source) {
     const std::string text = trim(raw.substr(0, raw.find('#')));
     if (text.empty()) continue;
     if (!version) {
-      if (text != kWeightsVersion) fail(source, line, "expected the version line '" + std::string(kWeightsVersion) + "'");
+      if (text != kWeightsVersion)
+        fail(source, line, "expected the version line '" + std::string(kWeightsVersion) + "'");
       version = true;
       continue;
     }
     const auto equals = text.find('=');
-    if (equals == std::string::npos) fail(source, line, "expected 'key = value', got '" + text + "'");
+    if (equals == std::string::npos)
+      fail(source, line, "expected 'key = value', got '" + text + "'");
     const std::string key = trim(text.substr(0, equals)), value = trim(text.substr(equals + 1));
     int k = 0;
     while (k < kWeightCount && key != kWeightNames[k]) ++k;
     if (k == kWeightCount) fail(source, line, "unknown weight '" + key + "'");
-    if (seen[k] != 0) fail(source, line, key + " given twice (first on line " + std::to_string(seen[k]) + ")");
-    if (!to_number(value, w[k])) fail(source, line, key + ": not a finite number: '" + value + "'");
+    if (seen[k] != 0) {
+      std::string message = key;
+      message += " given twice (first on line " + std::to_string(seen[k]);
+      message += ')';
+      fail(source, line, message);
+    }
+    if (!to_number(value, w[k])) {
+      std::string message = key;
+      message += ": not a finite number: '" + value + "'";
+      fail(source, line, message);
+    }
     if (!(w[k] > 0.0)) fail(source, line, key + ": a weight must be > 0");
     seen[k] = line;
   }
@@ -133,22 +144,28 @@ std::vector<Demonstration> parse_demonstrations(std::istream& in, const std::str
     for (std::string field; std::getline(row, field, ',');) fields.push_back(trim(field));
     if (!text.empty() && text.back() == ',') fields.emplace_back();
     if (static_cast<int>(fields.size()) != kColumns) {
-      fail(source, line, "expected " + std::to_string(kColumns) + " fields, got " + std::to_string(fields.size()));
+      fail(
+          source, line,
+          "expected " + std::to_string(kColumns) + " fields, got " + std::to_string(fields.size()));
     }
     double id = 0.0, time = 0.0;
-    if (!to_number(fields[0], id) || id != std::floor(id) || id < 0.0) fail(source, line, "demo: not a demonstration number");
+    if (!to_number(fields[0], id) || id != std::floor(id) || id < 0.0)
+      fail(source, line, "demo: not a demonstration number");
     if (!to_number(fields[1], time)) fail(source, line, "time: not a finite number");
     const bool new_demo = demos.empty() || static_cast<std::size_t>(id) != demos.size() - 1;
     if (new_demo) {
       if (static_cast<std::size_t>(id) != demos.size()) {
-        fail(source, line, "demonstration " + std::to_string(static_cast<long>(id)) + " out of order (expected " +
-                               std::to_string(demos.size()) + ")");
+        fail(source, line,
+             "demonstration " + std::to_string(static_cast<long>(id)) + " out of order (expected " +
+                 std::to_string(demos.size()) + ")");
       }
-      if (open_inputs) fail(source, line, "the previous demonstration's last row has inputs (it must have none)");
+      if (open_inputs)
+        fail(source, line, "the previous demonstration's last row has inputs (it must have none)");
       demos.emplace_back();
       demos.back().start_time = time;
     } else {
-      if (!open_inputs) fail(source, line, "a row after the demonstration's last row (the one without inputs)");
+      if (!open_inputs)
+        fail(source, line, "a row after the demonstration's last row (the one without inputs)");
       if (std::abs(time - (last_time + humanoid::kCoarseStep)) > kTimeTolerance) {
         fail(source, line, "time: rows of a demonstration must be 0.03 s apart");
       }
@@ -156,7 +173,8 @@ std::vector<Demonstration> parse_demonstrations(std::istream& in, const std::str
     Demonstration& demo = demos.back();
     humanoid::StateVector x;
     for (int i = 0; i < kStateColumns; ++i) {
-      if (!to_number(fields[2 + i], x[i])) fail(source, line, "x" + std::to_string(i) + ": not a finite number");
+      if (!to_number(fields[2 + i], x[i]))
+        fail(source, line, "x" + std::to_string(i) + ": not a finite number");
     }
     if (std::abs(x.segment<4>(3).norm() - 1.0) > kQuaternionTolerance) {
       fail(source, line, "x3..x6: the quaternion is not of unit norm");
@@ -180,7 +198,8 @@ std::vector<Demonstration> parse_demonstrations(std::istream& in, const std::str
     open_inputs = !empty_inputs;
     last_time = time;
   }
-  if (open_inputs) fail(source, line, "the file ends inside a demonstration (its last row must have no inputs)");
+  if (open_inputs)
+    fail(source, line, "the file ends inside a demonstration (its last row must have no inputs)");
   if (demos.empty()) throw IocFileError(source + ": no demonstration");
   return demos;
 }

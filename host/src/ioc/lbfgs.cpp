@@ -1,7 +1,7 @@
 #include "hmpc/ioc/lbfgs.hpp"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <stdexcept>
 #include <vector>

@@ -6,8 +6,10 @@
 
 namespace hmpc::ioc {
 
-LearnResult learn_weights(const LocalIoc& ioc, const LearnConfig& config, const LearnProgress& progress) {
-  if (ioc.window_count() == 0) throw std::invalid_argument("IOC: no demonstration is a whole window long");
+LearnResult learn_weights(const LocalIoc& ioc, const LearnConfig& config,
+                          const LearnProgress& progress) {
+  if (ioc.window_count() == 0)
+    throw std::invalid_argument("IOC: no demonstration is a whole window long");
   if (!(config.initial.array() > 0.0).all() || !config.initial.allFinite()) {
     throw std::invalid_argument("IOC: every initial weight must be positive and finite");
   }
@@ -25,10 +27,12 @@ LearnResult learn_weights(const LocalIoc& ioc, const LearnConfig& config, const 
   if (!std::isfinite(result.initial_log_likelihood)) {
     throw std::invalid_argument("IOC: the likelihood is not finite at the initial weights");
   }
-  const IterationReport report = [&progress](int iteration, const Eigen::VectorXd& theta, double value) {
+  const IterationReport report = [&progress](int iteration, const Eigen::VectorXd& theta,
+                                             double value) {
     if (progress) progress(iteration, theta.array().exp().matrix(), -value);
   };
-  const LbfgsResult fit = minimize_lbfgs(objective, config.initial.array().log().matrix(), config.lbfgs, report);
+  const LbfgsResult fit =
+      minimize_lbfgs(objective, config.initial.array().log().matrix(), config.lbfgs, report);
   result.weights = fit.x.array().exp().matrix();
   result.log_likelihood = -fit.value;
   result.iterations = fit.iterations;

@@ -21,8 +21,8 @@ using JointStateMatrix = Eigen::Matrix<double, kJoints, kStateSize>;
 struct LocalIoc::Workspace {
   StateVector V_x;
   StateMatrix V_xx;
-  std::array<JointVector, kWindowSteps> k;          // k_t = Q_uu^-1 Q_u
-  std::array<JointStateMatrix, kWindowSteps> K;     // K_t = Q_uu^-1 Q_ux
+  std::array<JointVector, kWindowSteps> k;       // k_t = Q_uu^-1 Q_u
+  std::array<JointStateMatrix, kWindowSteps> K;  // K_t = Q_uu^-1 Q_ux
   std::array<JointMatrix, kWindowSteps> Q_uu_inverse;
 };
 
@@ -53,7 +53,8 @@ void check_demonstration(const Demonstration& demo, std::size_t index) {
     throw std::invalid_argument(name + ": " + std::to_string(demo.states.size()) + " states for " +
                                 std::to_string(demo.inputs.size()) + " inputs (needs inputs + 1)");
   }
-  if (!std::isfinite(demo.start_time)) throw std::invalid_argument(name + ": start time not finite");
+  if (!std::isfinite(demo.start_time))
+    throw std::invalid_argument(name + ": start time not finite");
   for (std::size_t k = 0; k < demo.states.size(); ++k) {
     if (!demo.states[k].allFinite()) {
       throw std::invalid_argument(name + ": state " + std::to_string(k) + " not finite");
@@ -108,8 +109,11 @@ LocalIoc::LocalIoc(const humanoid::Motion& motion, const std::vector<Demonstrati
   // Eq. 4.29's beta^init from the state every motion starts in (closed_loop.hpp), as in the
   // MPC that generates with the learned weights.
   const humanoid::State start = humanoid::standing_state(config, humanoid::kStartHeight);
-  std::vector<std::unique_ptr<Problem>> problems;  // one per lane: a problem's step maps are scratch
-  for (int lane = 0; lane < lanes; ++lane) problems.push_back(std::make_unique<Problem>(unit, start, config));
+  std::vector<std::unique_ptr<Problem>>
+      problems;  // one per lane: a problem's step maps are scratch
+  problems.reserve(lanes);
+  for (int lane = 0; lane < lanes; ++lane)
+    problems.push_back(std::make_unique<Problem>(unit, start, config));
   const int count = static_cast<int>(sources.size());
   humanoid::run_on(pool, lanes, [&](int lane) {
     Problem& problem = *problems[lane];
@@ -186,7 +190,8 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
     work.k[t] = llt.solve(Q_u);
     work.K[t] = llt.solve(Q_ux);
     work.Q_uu_inverse[t] = llt.solve(JointMatrix::Identity());
-    value += -0.5 * Q_u.dot(work.k[t]) + llt.matrixLLT().diagonal().array().log().sum() - 0.5 * free * kLog2Pi;
+    value += -0.5 * Q_u.dot(work.k[t]) + llt.matrixLLT().diagonal().array().log().sum() -
+             0.5 * free * kLog2Pi;
     if (t == 0) break;  // V at x_1 is not needed
     StateVector Q_x = A.transpose() * work.V_x;
     StateMatrix Q_xx = A.transpose() * work.V_xx * A;
@@ -200,7 +205,8 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
   // U* = U - H^-1 g and covariance H^-1, and the backward pass factorises it step by step,
   //   u_t = u_t + du_t,  du_t = -k_t - K_t dx_t + e_t,  e_t ~ N(0, Q_uu^-1),  dx_1 = 0,
   // so the mean deviations (dx, du) and covariances follow the linear model forward:
-  //   Sigma_u,t = K Sigma_x,t K' + Q_uu^-1,  Sigma_x,t+1 = (A - B K) Sigma_x,t (A - B K)' + B Q_uu^-1 B'.
+  //   Sigma_u,t = K Sigma_x,t K' + Q_uu^-1,  Sigma_x,t+1 = (A - B K) Sigma_x,t (A - B K)' + B
+  //   Q_uu^-1 B'.
   // The gradient's terms are sums over steps (g_k, H_k are, Eqs. 4.14-4.15 and the state
   // features' Gauss-Newton derivatives): -h' g_k = dU' g_k, h' H_k h = dU' H_k dU,
   // tr(H^-1 H_k) = sum_t tr(Sigma_t l_k,xx or uu). This is the same quantity as the thesis's
@@ -222,11 +228,13 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
     // 2 u_j du_j + du_j^2 + Sigma_u,jj.
     for (int j = 0; j < kJoints; ++j) {
       if (!window.free[t][j]) continue;
-      (*gradient)[kHAA + j % humanoid::kJointsPerLeg] += 2.0 * window.inputs[t][j] * du[j] + du[j] * du[j] + Sigma_u(j, j);
+      (*gradient)[kHAA + j % humanoid::kJointsPerLeg] +=
+          2.0 * window.inputs[t][j] * du[j] + du[j] * du[j] + Sigma_u(j, j);
     }
     const humanoid::StepJacobian closed_loop = A - B * K;
     dx = A * dx + B * du;
-    Sigma_x = closed_loop * Sigma_x * closed_loop.transpose() + B * work.Q_uu_inverse[t] * B.transpose();
+    Sigma_x =
+        closed_loop * Sigma_x * closed_loop.transpose() + B * work.Q_uu_inverse[t] * B.transpose();
     // A state row r of weight k at x_{t+1}: l_x = 2 r J_r', l_xx = 2 J_r' J_r, so its terms
     // are 2 r a + a^2 + J_r Sigma_x J_r' with a = J_r dx.
     const auto& J = window.J[t];
@@ -234,7 +242,8 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
       const int k = feature_of_row_[row];
       if (k < 0) continue;
       const double a = J.row(row).dot(dx);
-      (*gradient)[k] += 2.0 * window.residual[t][row] * a + a * a + J.row(row) * Sigma_x * J.row(row).transpose();
+      (*gradient)[k] +=
+          2.0 * window.residual[t][row] * a + a * a + J.row(row) * Sigma_x * J.row(row).transpose();
     }
   }
   return value;
@@ -248,7 +257,8 @@ double LocalIoc::log_likelihood(const Weights& w, Weights* gradient) const {
   const int count = window_count();
   humanoid::run_on(pool_, lanes, [&](int lane) {
     for (int m = lane; m < count; m += lanes) {
-      values_[m] = window_log_likelihood(windows_[m], w, lanes_[lane], gradient ? &gradients_[m] : nullptr);
+      values_[m] =
+          window_log_likelihood(windows_[m], w, lanes_[lane], gradient ? &gradients_[m] : nullptr);
     }
   });
   // Summed in window order: the same total on any number of threads.

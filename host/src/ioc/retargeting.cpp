@@ -16,7 +16,9 @@ namespace {
 constexpr int kLegJoints = 2 * humanoid::kJointsPerLeg;
 constexpr int kJointOffset = 7;  // q = (p, quaternion, joints)
 
-Eigen::Quaterniond quaternion_of(const Configuration& q) { return Eigen::Quaterniond(q[3], q[4], q[5], q[6]); }
+Eigen::Quaterniond quaternion_of(const Configuration& q) {
+  return Eigen::Quaterniond(q[3], q[4], q[5], q[6]);
+}
 
 // What dynamic time warping compares, each part scaled by a deviation we count as equal:
 // 5 cm of base height, 0.05 of a quaternion component (6 degrees), 0.1 rad of a joint angle.
@@ -30,13 +32,15 @@ Eigen::Matrix<double, 4 + kLegJoints, 1> warping_features(const Configuration& q
 
 }  // namespace
 
-Configuration map_pose(const Configuration& pose, double length_scale, const humanoid::Parameters& robot) {
+Configuration map_pose(const Configuration& pose, double length_scale,
+                       const humanoid::Parameters& robot) {
   Configuration q = pose;
   q.head<3>() *= length_scale;
   q.segment<4>(3).normalize();
   for (int j = 0; j < kLegJoints; ++j) {
     const int joint = j % humanoid::kJointsPerLeg;
-    q[kJointOffset + j] = std::clamp(q[kJointOffset + j], robot.joint_lower[joint], robot.joint_upper[joint]);
+    q[kJointOffset + j] =
+        std::clamp(q[kJointOffset + j], robot.joint_lower[joint], robot.joint_upper[joint]);
   }
   return q;
 }
@@ -62,7 +66,8 @@ std::vector<Configuration> low_pass(const std::vector<Configuration>& poses) {
   return out;
 }
 
-std::vector<double> align(const std::vector<Configuration>& poses, const std::vector<Configuration>& reference) {
+std::vector<double> align(const std::vector<Configuration>& poses,
+                          const std::vector<Configuration>& reference) {
   const int n = static_cast<int>(reference.size()), m = static_cast<int>(poses.size());
   if (n == 0 || m == 0) throw std::invalid_argument("align: empty pose sequence");
   // Accumulated cost D(i, j) = d(i, j) + min(D(i-1, j), D(i, j-1), D(i-1, j-1)).
@@ -116,7 +121,8 @@ std::vector<double> align(const std::vector<Configuration>& poses, const std::ve
   return smooth;
 }
 
-std::vector<Configuration> resample(const std::vector<Configuration>& poses, const std::vector<double>& at) {
+std::vector<Configuration> resample(const std::vector<Configuration>& poses,
+                                    const std::vector<double>& at) {
   if (poses.size() < 2) throw std::invalid_argument("resample: needs 2 poses or more");
   std::vector<Configuration> out;
   out.reserve(at.size());
@@ -138,14 +144,16 @@ std::vector<State> with_velocities(const std::vector<Configuration>& poses, doub
   for (int k = 0; k < n; ++k) {
     const int a = std::max(0, k - 1), b = std::min(n - 1, k + 1);
     const double dt = (b - a) * step;
-    const Eigen::Quaterniond qa = quaternion_of(poses[a]), qb = quaternion_of(poses[b]), qk = quaternion_of(poses[k]);
+    const Eigen::Quaterniond qa = quaternion_of(poses[a]), qb = quaternion_of(poses[b]),
+                             qk = quaternion_of(poses[k]);
     State& x = states[k];
     x.q = poses[k];
     // v = (torso angular velocity, torso origin velocity, joint rates), the first two in torso
     // coordinates (model.hpp).
     const Eigen::AngleAxisd turn(qa.conjugate() * qb);
     x.v.head<3>() = turn.angle() * turn.axis() / dt;
-    x.v.segment<3>(3) = qk.conjugate() * Eigen::Vector3d((poses[b].head<3>() - poses[a].head<3>()) / dt);
+    x.v.segment<3>(3) =
+        qk.conjugate() * Eigen::Vector3d((poses[b].head<3>() - poses[a].head<3>()) / dt);
     x.v.tail<kLegJoints>() = (poses[b].tail<kLegJoints>() - poses[a].tail<kLegJoints>()) / dt;
   }
   return states;
@@ -162,9 +170,10 @@ humanoid::Motion motion_along(const std::vector<State>& states, const humanoid::
                               const humanoid::ProblemConfig& problem) {
   if (states.empty()) throw std::invalid_argument("motion_along: no states");
   if (static_cast<int>(states.size()) > humanoid::kMaxPhases) {
-    throw std::invalid_argument("motion_along: " + std::to_string(states.size()) + " samples need more than " +
-                                std::to_string(humanoid::kMaxPhases) + " phases (" +
-                                std::to_string(humanoid::kMaxPhases * humanoid::kCoarseStep) + " s)");
+    throw std::invalid_argument(
+        "motion_along: " + std::to_string(states.size()) + " samples need more than " +
+        std::to_string(humanoid::kMaxPhases) + " phases (" +
+        std::to_string(humanoid::kMaxPhases * humanoid::kCoarseStep) + " s)");
   }
   const humanoid::StateCost cost(task, states.front(), problem);
   humanoid::Motion m = task;
@@ -192,7 +201,8 @@ MotionErrors motion_errors(const humanoid::Motion& targets, const humanoid::Clos
     const double cosine = std::min(1.0, std::abs(a.dot(s.base.quaternion)));
     e.attitude += std::pow(2.0 * std::acos(cosine), 2);
     e.velocity += (s.base.velocity - target.velocity).squaredNorm();
-    for (int j = 0; j < kLegJoints; ++j) e.joints += std::pow(s.state.q[kJointOffset + j] - target.joints[j], 2) / kLegJoints;
+    for (int j = 0; j < kLegJoints; ++j)
+      e.joints += std::pow(s.state.q[kJointOffset + j] - target.joints[j], 2) / kLegJoints;
   }
   const double n = static_cast<double>(run.samples.size());
   e.height = std::sqrt(e.height / n);
@@ -229,7 +239,8 @@ std::vector<State> mean_motion(const std::vector<std::vector<State>>& motions) {
 
 }  // namespace
 
-Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion& task, const RetargetConfig& config,
+Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion& task,
+                    const RetargetConfig& config,
                     const std::function<void(int index, const TrackedDemonstration&)>& progress) {
   if (captures.empty()) throw std::invalid_argument("retarget: no captures");
   for (const Capture& c : captures) {
@@ -241,14 +252,16 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
   std::vector<std::vector<Configuration>> mapped;
   for (const Capture& c : captures) {
     std::vector<Configuration> poses;
-    for (const Configuration& q : low_pass(c.poses)) poses.push_back(map_pose(q, length_scale, config.robot.parameters));
+    for (const Configuration& q : low_pass(c.poses))
+      poses.push_back(map_pose(q, length_scale, config.robot.parameters));
     mapped.push_back(std::move(poses));
   }
   // Step 2: the reference is the capture of median length; robot sample k (time k Delta t_c) is
   // the reference's sample k / c, c = sqrt(l_robot / l_demonstrator).
   std::vector<std::size_t> order(mapped.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mapped[a].size() < mapped[b].size(); });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return mapped[a].size() < mapped[b].size(); });
   const std::vector<Configuration>& reference = mapped[order[order.size() / 2]];
   out.time_scale = std::sqrt(length_scale);
   const int samples = static_cast<int>(std::floor((reference.size() - 1) * out.time_scale)) + 1;
@@ -260,7 +273,8 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
     std::vector<double> at(samples);
     for (int k = 0; k < samples; ++k) {
       const double s = std::min(reference_at[k], static_cast<double>(match.size() - 1));
-      const int i = std::min(static_cast<int>(s), static_cast<int>(match.size()) - 2);  // match has >= 2
+      const int i =
+          std::min(static_cast<int>(s), static_cast<int>(match.size()) - 2);  // match has >= 2
       at[k] = match[i] + (s - i) * (match[i + 1] - match[i]);
     }
     warped.push_back(with_velocities(resample(poses, at), humanoid::kCoarseStep));
@@ -289,7 +303,8 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
   for (const TrackedDemonstration& t : out.tracked) {
     if (t.fell) continue;
     std::vector<State> states;
-    for (const humanoid::StateVector& x : t.demonstration.states) states.push_back(humanoid::to_state(x));
+    for (const humanoid::StateVector& x : t.demonstration.states)
+      states.push_back(humanoid::to_state(x));
     robot.push_back(std::move(states));
   }
   out.mean = mean_motion(robot.empty() ? warped : robot);

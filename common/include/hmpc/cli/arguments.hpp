@@ -54,9 +54,7 @@ inline int exit_status(ParseOutcome outcome, const char* program, const std::str
 class OptionParser {
  public:
   // Sets `target` when the option is present.
-  void flag(const std::string& name, bool& target) {
-    flags_[name] = &target;
-  }
+  void flag(const std::string& name, bool& target) { flags_[name] = &target; }
   // A number in [lo, hi], stored times `scale` (e.g. 0.01 for a percentage into a fraction).
   void number(const std::string& name, double lo, double hi, const std::string& what,
               double& target, double scale = 1) {
@@ -75,8 +73,8 @@ class OptionParser {
     valued_[name] = [=, &target](const std::string& v, std::string& error) {
       long value = 0;
       if (!parse_integer(v, lo, hi, value)) {
-        error = bad_value(name, "an integer in " + std::to_string(lo) + ".." + std::to_string(hi),
-                          v);
+        error =
+            bad_value(name, "an integer in " + std::to_string(lo) + ".." + std::to_string(hi), v);
         return false;
       }
       target = Integer(value);
@@ -85,7 +83,7 @@ class OptionParser {
   }
   // Any other value: `accept` stores it or says what is wrong (a non-empty message).
   void text(const std::string& name, std::function<std::string(const std::string&)> accept) {
-    valued_[name] = [accept](const std::string& v, std::string& error) {
+    valued_[name] = [accept = std::move(accept)](const std::string& v, std::string& error) {
       error = accept(v);
       return error.empty();
     };

@@ -46,11 +46,11 @@ class LoadVelocityFeedbackPid {
     // D(s) = s / (T_f s + 1), discretised by backward Euler so it is stable for any dt.
     // 0: plain backward difference. A cutoff f_c corresponds to T_f = 1 / (2 pi f_c).
     Scalar derivative_time_constant = Scalar(0);
-    Scalar integral_limit = Scalar(0);     // |I| bound, output units; 0 disables the integral
+    Scalar integral_limit = Scalar(0);  // |I| bound, output units; 0 disables the integral
     Scalar output_min = Scalar(-1);
     Scalar output_max = Scalar(1);
-    Scalar load_velocity_gain = Scalar(0); // k_lvf = k_v / k_q of the actuator
-    Scalar feedforward_gain = Scalar(0);   // output per unit setpoint, e.g. 1 / (k_q T) for torque
+    Scalar load_velocity_gain = Scalar(0);  // k_lvf = k_v / k_q of the actuator
+    Scalar feedforward_gain = Scalar(0);    // output per unit setpoint, e.g. 1 / (k_q T) for torque
     // Output on a rejected update (non-finite input, dt <= 0, invalid config): e.g. the valve
     // command that vents the actuator or holds it at a safe pressure.
     Scalar safe_output = Scalar(0);
@@ -58,20 +58,20 @@ class LoadVelocityFeedbackPid {
 
   enum class Fault : std::uint8_t {
     kNone = 0,
-    kNonFiniteInput,    // setpoint, measurement, load velocity or dt is NaN or infinite
+    kNonFiniteInput,  // setpoint, measurement, load velocity or dt is NaN or infinite
     kNonPositiveTimeStep,
-    kInvalidConfig,     // see config_valid()
-    kNonFiniteResult,   // finite but extreme inputs overflowed the arithmetic
+    kInvalidConfig,    // see config_valid()
+    kNonFiniteResult,  // finite but extreme inputs overflowed the arithmetic
   };
 
   struct State {
-    Scalar integral = Scalar(0);              // I, output units
-    Scalar filtered_derivative = Scalar(0);   // d_f, measurement units per second
+    Scalar integral = Scalar(0);             // I, output units
+    Scalar filtered_derivative = Scalar(0);  // d_f, measurement units per second
     // Derivative on measurement: the previous measurement, not the previous error, is kept.
     Scalar previous_measurement = Scalar(0);
     bool has_previous_measurement = false;
-    Scalar output = Scalar(0);                // last output
-    bool saturated = false;                   // last output was clamped to a limit
+    Scalar output = Scalar(0);  // last output
+    bool saturated = false;     // last output was clamped to a limit
     // Sticky: the latest reason an update was rejected, until reset(). Updates after a fault
     // run normally; the board's state machine decides whether to leave closed-loop control.
     Fault fault = Fault::kNone;
@@ -82,8 +82,8 @@ class LoadVelocityFeedbackPid {
     using std::isfinite;
     return isfinite(c.kp) && isfinite(c.ki) && isfinite(c.kd) &&
            isfinite(c.derivative_time_constant) && c.derivative_time_constant >= Scalar(0) &&
-           isfinite(c.integral_limit) && c.integral_limit >= Scalar(0) &&
-           isfinite(c.output_min) && isfinite(c.output_max) && c.output_min <= c.output_max &&
+           isfinite(c.integral_limit) && c.integral_limit >= Scalar(0) && isfinite(c.output_min) &&
+           isfinite(c.output_max) && c.output_min <= c.output_max &&
            isfinite(c.load_velocity_gain) && isfinite(c.feedforward_gain) &&
            isfinite(c.safe_output);
   }

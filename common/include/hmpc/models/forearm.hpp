@@ -26,17 +26,17 @@ struct Parameters {
   // of mass and radius of gyration are our choice for a forearm-and-hand link of an adult-size
   // arm: 0.30 m long, centre of mass at 0.13 m, gyration about the centre of mass as a
   // uniform rod of that length (L / sqrt(12)).
-  Scalar mass = Scalar(2.7);                  // kg (thesis)
-  Scalar com_distance = Scalar(0.13);         // m, elbow to centre of mass
-  Scalar gyration_radius = Scalar(0.0866);    // m, about the centre of mass
-  Scalar gravity = Scalar(9.81);              // m/s^2
+  Scalar mass = Scalar(2.7);                // kg (thesis)
+  Scalar com_distance = Scalar(0.13);       // m, elbow to centre of mass
+  Scalar gyration_radius = Scalar(0.0866);  // m, about the centre of mass
+  Scalar gravity = Scalar(9.81);            // m/s^2
 
   // Smooth friction, as the thesis uses (its ref. [82], Makkar et al.): viscous plus a
   // tanh-smoothed Coulomb term. Values: a light plain-bearing elbow; the smoothing velocity is
   // wide enough that the 40 ms coarse model stays stable (h * F_c / (I v_s) < 1).
-  Scalar viscous_friction = Scalar(0.05);     // N·m·s/rad
-  Scalar coulomb_friction = Scalar(0.10);     // N·m
-  Scalar friction_velocity = Scalar(0.2);     // rad/s, tanh smoothing
+  Scalar viscous_friction = Scalar(0.05);  // N·m·s/rad
+  Scalar coulomb_friction = Scalar(0.10);  // N·m
+  Scalar friction_velocity = Scalar(0.2);  // rad/s, tanh smoothing
 
   // Pneumatic artificial muscle, Chou & Hannaford (1996) static model
   //   F = p (pi D0^2 / 4) (3 (1 - e)^2 / tan^2 a0 - 1 / sin^2 a0),
@@ -44,22 +44,22 @@ struct Parameters {
   // with a 25 degree braid, 0.25 m long, 10 % pre-contracted at theta = 0, on a 20 mm pulley:
   // it holds the arm horizontal at about 1.5 bar, mid-range of the valve, and gives ~11 N·m
   // at 5 bar: the "strong" actuator, ten times the motor.
-  Scalar pam_diameter = Scalar(0.016);        // m, D0
-  Scalar pam_braid_angle = Scalar(0.4363);    // rad, a0 = 25 deg
-  Scalar pam_rest_length = Scalar(0.25);      // m, L0
-  Scalar pam_precontraction = Scalar(0.10);   // e0 at theta = 0
-  Scalar pulley_radius = Scalar(0.020);       // m, r
+  Scalar pam_diameter = Scalar(0.016);       // m, D0
+  Scalar pam_braid_angle = Scalar(0.4363);   // rad, a0 = 25 deg
+  Scalar pam_rest_length = Scalar(0.25);     // m, L0
+  Scalar pam_precontraction = Scalar(0.10);  // e0 at theta = 0
+  Scalar pulley_radius = Scalar(0.020);      // m, r
 
   // Valve and muscle volume: first-order pressure response with time constant T_p / k_vp.
   // 5 V commands 5 bar (k_vp = 1 V/bar); 150 ms time constant, typical of a proportional
   // valve filling a McKibben muscle through a hose: the "slow" actuator.
-  Scalar k_vp = Scalar(1.0);                  // V/bar
-  Scalar T_p = Scalar(0.15);                  // V·s/bar
+  Scalar k_vp = Scalar(1.0);  // V/bar
+  Scalar T_p = Scalar(0.15);  // V·s/bar
 
   // Electric motor with driver in torque mode: tau_m = k_m v_m, 0.3 N·m at 5 V, a small
   // lightweight assist motor (the thesis: its torque is "much smaller than that of PAM",
   // Sec. 3.4.3): the weak but fast actuator, electrical dynamics neglected.
-  Scalar motor_gain = Scalar(0.06);           // N·m/V
+  Scalar motor_gain = Scalar(0.06);  // N·m/V
 
   // Input limits (thesis Sec. 3.3): 0 <= v_p <= 5 V, -5 <= v_m <= 5 V.
   Scalar v_p_min = Scalar(0), v_p_max = Scalar(5);
@@ -74,10 +74,10 @@ struct Parameters {
   // pulling, so it adds nothing at first touch and damps in proportion to impact speed. With
   // d = 0.5 s/rad the vented arm falling from the horizontal (~10 rad/s at impact) compresses
   // the stop by 0.012 rad and keeps ~3 % of its energy (rebounds 0.15 rad).
-  Scalar stop_lower = Scalar(-1.45);          // rad
-  Scalar stop_upper = Scalar(1.75);           // rad
-  Scalar stop_stiffness = Scalar(1e4);        // N·m/rad
-  Scalar stop_dissipation = Scalar(0.5);      // s/rad
+  Scalar stop_lower = Scalar(-1.45);      // rad
+  Scalar stop_upper = Scalar(1.75);       // rad
+  Scalar stop_stiffness = Scalar(1e4);    // N·m/rad
+  Scalar stop_dissipation = Scalar(0.5);  // s/rad
 
   Scalar inertia() const {
     return mass * (com_distance * com_distance + gyration_radius * gyration_radius);
@@ -94,7 +94,7 @@ struct CostWeights {
   Scalar gamma = Scalar(0.1);  // smoothness of smin, Eq. 3.4
   // Below P0 the cable to the muscle goes slack (Sec. 3.3). The thesis gives no value; 0.5
   // bar is where a McKibben muscle of this size just takes up its own braid slack.
-  Scalar P0 = Scalar(0.5);     // bar
+  Scalar P0 = Scalar(0.5);  // bar
 };
 
 // PAM torque tau_p(P, theta) and its partial derivatives.
@@ -111,9 +111,9 @@ PamTorque<Scalar> pam_torque(const Parameters<Scalar>& p, Scalar pressure_bar, S
   const Scalar a = Scalar(3) / (tan(p.pam_braid_angle) * tan(p.pam_braid_angle));
   const Scalar b = Scalar(1) / (sin(p.pam_braid_angle) * sin(p.pam_braid_angle));
   const Scalar r = p.pulley_radius;
-  const Scalar de = r / p.pam_rest_length;               // d contraction / d theta
+  const Scalar de = r / p.pam_rest_length;  // d contraction / d theta
   const Scalar stretch = Scalar(1) - (p.pam_precontraction + de * theta);  // 1 - e
-  const Scalar pa_area = Scalar(1e5) * area;             // N per bar
+  const Scalar pa_area = Scalar(1e5) * area;                               // N per bar
   const Scalar shape = a * stretch * stretch - b;
   PamTorque<Scalar> t;
   t.tau = r * pa_area * pressure_bar * shape;
@@ -132,8 +132,7 @@ struct JointAcceleration {
 
 template <typename Scalar>
 JointAcceleration<Scalar> joint_acceleration(const Parameters<Scalar>& p, Scalar theta,
-                                             Scalar theta_dot, Scalar pressure_bar,
-                                             Scalar v_m) {
+                                             Scalar theta_dot, Scalar pressure_bar, Scalar v_m) {
   using std::cos;
   using std::sin;
   using std::tanh;
@@ -141,8 +140,8 @@ JointAcceleration<Scalar> joint_acceleration(const Parameters<Scalar>& p, Scalar
   const Scalar gravity_arm = p.mass * p.gravity * p.com_distance;
   const Scalar smooth_sign = tanh(theta_dot / p.friction_velocity);
   // c(theta, theta'): gravity and smooth friction.
-  const Scalar c = -gravity_arm * cos(theta) - p.viscous_friction * theta_dot -
-                   p.coulomb_friction * smooth_sign;
+  const Scalar c =
+      -gravity_arm * cos(theta) - p.viscous_friction * theta_dot - p.coulomb_friction * smooth_sign;
   const PamTorque<Scalar> pam = pam_torque(p, pressure_bar, theta);
   JointAcceleration<Scalar> a;
   a.value = inv_inertia * (c + pam.tau + p.motor_gain * v_m);

@@ -71,7 +71,7 @@ struct Strategies {
   };
 
   static int samples_per_step(double step) {
-    return static_cast<int>(step / kControlPeriod + 0.5);
+    return static_cast<int>(std::lround(step / kControlPeriod));
   }
   template <class Mpc>
   static Mpc single(const Setup& s, double step) {
@@ -125,11 +125,11 @@ struct NoComputeDelay {
 template <typename Scalar>
 struct TrackingOutcome {
   Eigen::Matrix<Scalar, 3, 1> final_state;
-  Scalar accumulated_cost = 0;  // Eq. 3.3a summed over control periods
-  Scalar rms_error = 0;         // RMS of theta - theta_d over control periods [rad]
+  Scalar accumulated_cost = 0;       // Eq. 3.3a summed over control periods
+  Scalar rms_error = 0;              // RMS of theta - theta_d over control periods [rad]
   Scalar mean_abs_pam_torque = 0;    // N·m, for the torque share of Fig. 3.8a
   Scalar mean_abs_motor_torque = 0;  // N·m
-  int overruns = 0;             // control periods skipped because a solve was still running
+  int overruns = 0;                  // control periods skipped because a solve was still running
 
   Scalar motor_share() const {
     return mean_abs_motor_torque / (mean_abs_pam_torque + mean_abs_motor_torque);
@@ -174,9 +174,10 @@ TrackingOutcome<Scalar> simulate_tracking(Mpc& mpc, const Parameters<Scalar>& pl
       if (t + s * kPlantStep >= apply_at - 1e-12) applied = pending;
       if (s == 0) {
         const Scalar error = x(0) - target.angle(Scalar(t));
-        out.accumulated_cost += tracking_cost(plant, weights, x(0), target.angle(Scalar(t)), x(2),
-                                              applied(0), true).value +
-                                weights.w_v * applied.squaredNorm();
+        out.accumulated_cost +=
+            tracking_cost(plant, weights, x(0), target.angle(Scalar(t)), x(2), applied(0), true)
+                .value +
+            weights.w_v * applied.squaredNorm();
         out.rms_error += error * error;
         out.mean_abs_pam_torque += std::abs(pam_torque(plant, x(2), x(0)).tau);
         out.mean_abs_motor_torque += std::abs(plant.motor_gain * applied(0));

@@ -65,8 +65,8 @@ struct JointStep {
 };
 
 template <typename Scalar>
-JointStep<Scalar> joint_step(const Parameters<Scalar>& p, Scalar h, Scalar theta,
-                             Scalar theta_dot, Scalar pressure, Scalar v_m) {
+JointStep<Scalar> joint_step(const Parameters<Scalar>& p, Scalar h, Scalar theta, Scalar theta_dot,
+                             Scalar pressure, Scalar v_m) {
   const JointAcceleration<Scalar> a = joint_acceleration(p, theta, theta_dot, pressure, v_m);
   JointStep<Scalar> s;
   s.theta_dot = theta_dot + h * a.value;
@@ -156,7 +156,6 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
     return Control(motor_enabled_ ? p_.v_m_max : Scalar(0), p_.v_p_max);
   }
 
-
  private:
   Parameters<Scalar> p_;
   CostWeights<Scalar> w_;
@@ -172,8 +171,7 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
 // steps, so the underlying joint evolves continuously. The cost is Eq. 3.3 with the voltage
 // term replaced by w_v nu^2 (Sec. 3.3: "the deviation of the fast control input").
 template <typename Scalar, int NFast>
-class ForearmFastSubsystem
-    : public ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1> {
+class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1> {
   using Base = ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1>;
 
  public:

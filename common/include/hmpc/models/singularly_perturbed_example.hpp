@@ -18,12 +18,12 @@ namespace hmpc::sec24 {
 
 template <typename Scalar>
 struct Parameters {
-  Scalar epsilon = Scalar(0.1);   // Eq. 2.37
-  Scalar y_desired = Scalar(1);   // x^d = [1.0, 2.0] (Sec. 2.4.1)
+  Scalar epsilon = Scalar(0.1);  // Eq. 2.37
+  Scalar y_desired = Scalar(1);  // x^d = [1.0, 2.0] (Sec. 2.4.1)
   Scalar z_desired = Scalar(2);
-  Scalar q_y = Scalar(1);         // Q = diag(1.0, 1.0)
+  Scalar q_y = Scalar(1);  // Q = diag(1.0, 1.0)
   Scalar q_z = Scalar(1);
-  Scalar r = Scalar(0.01);        // R = R_nu = diag(0.01, 0.01)
+  Scalar r = Scalar(0.01);  // R = R_nu = diag(0.01, 0.01)
 };
 
 template <typename Scalar>
@@ -79,8 +79,7 @@ class FullProblem : public ProblemBase<FullProblem<Scalar>, Scalar, 2, 2> {
   using typename Base::StateJacobian;
   using typename Base::TerminalDerivatives;
 
-  FullProblem(const Parameters<Scalar>& parameters, Scalar step)
-      : p_(parameters), dt_(step) {}
+  FullProblem(const Parameters<Scalar>& parameters, Scalar step) : p_(parameters), dt_(step) {}
 
   Scalar step() const { return dt_; }
 
@@ -92,8 +91,8 @@ class FullProblem : public ProblemBase<FullProblem<Scalar>, Scalar, 2, 2> {
                             ControlJacobian& fu) const {
     using std::sin;
     const Scalar inv_eps = Scalar(1) / p_.epsilon;
-    fx << Scalar(1) - dt_, dt_,
-        -dt_ * inv_eps * x(1), Scalar(1) + dt_ * inv_eps * (-x(0) + sin(x(1)));
+    fx << Scalar(1) - dt_, dt_, -dt_ * inv_eps * x(1),
+        Scalar(1) + dt_ * inv_eps * (-x(0) + sin(x(1)));
     fu << -dt_, -dt_, -dt_ * inv_eps, dt_ * inv_eps;
   }
 
@@ -218,10 +217,12 @@ class FastSubsystem : public ProblemBase<FastSubsystem<Scalar, NFast>, Scalar, 1
   State deviation(const FullState& x) const { return State(x(1) - z_hat_[0]); }
   FullControl compose(const FullControl& u_hat, const Control& nu) const { return u_hat + nu; }
 
-  // Eq. 2.31b: zeta_{j+1} = zeta_j + (Delta t_f / eps) g(y_hat_j, zeta_j + z_hat_j, u_hat_j + nu_j).
+  // Eq. 2.31b: zeta_{j+1} = zeta_j + (Delta t_f / eps) g(y_hat_j, zeta_j + z_hat_j, u_hat_j +
+  // nu_j).
   State dynamics(const State& zeta, const Control& nu, int j) const {
     const Scalar z = zeta(0) + z_hat_[j];
-    const Scalar z_next = z + dt_ / p_.epsilon * fast_rate(y_hat_[j], z, FullControl(u_hat_[j] + nu));
+    const Scalar z_next =
+        z + dt_ / p_.epsilon * fast_rate(y_hat_[j], z, FullControl(u_hat_[j] + nu));
     return State(z_next - z_hat_[j + 1]);
   }
 

@@ -33,7 +33,8 @@ class DeadlineStop {
   using Duration = typename Clock::duration;
 
   // `enabled` false: never stops (an untruncated solve), but still measures.
-  DeadlineStop(TimePoint deadline, TimePoint hard_deadline, IterationTime<Clock>& time, bool enabled)
+  DeadlineStop(TimePoint deadline, TimePoint hard_deadline, IterationTime<Clock>& time,
+               bool enabled)
       : deadline_(deadline), hard_deadline_(hard_deadline), time_(time), enabled_(enabled) {}
 
   // Hands this update's longest iteration (the interval between two calls is one

@@ -33,11 +33,11 @@ class RecedingHorizonMpc {
   static constexpr int kMaxStepsPerSample = 8;
 
   RecedingHorizonMpc(const Problem& problem, const Config& config)
-      : problem_(problem), config_(config), solver_(config.solver),
-        clock_(config.samples_per_step),
-        steps_per_sample_(config.steps_per_sample < 1                    ? 1
-                          : config.steps_per_sample > kMaxStepsPerSample ? kMaxStepsPerSample
-                                                                         : config.steps_per_sample) {}
+      : problem_(problem), config_(config), solver_(config.solver), clock_(config.samples_per_step),
+        steps_per_sample_(config.steps_per_sample < 1 ? 1
+                          : config.steps_per_sample > kMaxStepsPerSample
+                              ? kMaxStepsPerSample
+                              : config.steps_per_sample) {}
 
   Problem& problem() { return problem_; }
   const Problem& problem() const { return problem_; }

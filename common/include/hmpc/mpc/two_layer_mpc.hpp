@@ -27,7 +27,9 @@ namespace hmpc {
 // The coarse layer plans on the full model: its state is the full state.
 struct FullModelUpperLayer {
   template <class Upper, class FullState>
-  static typename Upper::State to_upper(const Upper&, const FullState& x) { return x; }
+  static typename Upper::State to_upper(const Upper&, const FullState& x) {
+    return x;
+  }
   template <class Upper, class FullControl>
   static typename Upper::State to_full(const Upper&, const typename Upper::State& x,
                                        const FullControl&) {
@@ -75,9 +77,8 @@ class TwoLayerMpc {
   };
 
   TwoLayerMpc(const UpperProblem& upper, const FastSubsystem& fast, const Config& config)
-      : upper_problem_(upper), fast_problem_(fast), config_(config),
-        upper_solver_(config.upper), fast_solver_(config.fast),
-        clock_(config.samples_per_upper_step) {}
+      : upper_problem_(upper), fast_problem_(fast), config_(config), upper_solver_(config.upper),
+        fast_solver_(config.fast), clock_(config.samples_per_upper_step) {}
 
   UpperProblem& upper_problem() { return upper_problem_; }
   const UpperProblem& upper_problem() const { return upper_problem_; }
@@ -140,7 +141,7 @@ class TwoLayerMpc {
                                       config_.fast.max_iterations, fast_stop);
 
     // Line 4: time shift of the upper plan once an upper step has elapsed (Eq. 2.22).
-    const FullControl u = planned_control(0);
+    FullControl u = planned_control(0);
     if (clock_.advance()) upper_solver_.shift(1);
     return u;
   }

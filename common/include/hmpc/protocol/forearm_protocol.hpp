@@ -37,8 +37,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <string_view>
 #include <limits>
+#include <string_view>
 #include <type_traits>
 
 namespace hmpc::forearm_protocol {
@@ -355,7 +355,10 @@ inline constexpr SignalSpec kSignals[kSignalCount] = {
 constexpr std::size_t index_of(Signal signal) { return static_cast<std::size_t>(signal); }
 constexpr const SignalSpec& signal_spec(Signal signal) { return kSignals[index_of(signal)]; }
 
+// Half away from zero. Not std::lround, which is not constexpr; the one number it rounds
+// otherwise (0.5 less an ulp, which + 0.5 carries to 1) is immaterial at a signal's resolution.
 constexpr std::int64_t round_half_away(double x) {
+  // NOLINTNEXTLINE(bugprone-incorrect-roundings)
   return x < 0 ? -static_cast<std::int64_t>(-x + 0.5) : static_cast<std::int64_t>(x + 0.5);
 }
 // Raw value of a physical value that lies on the signal's grid.
@@ -730,7 +733,9 @@ constexpr std::int64_t integer_value(T value) {
 
 // Rounds half away from zero; the caller has bounded x to the signal's raw range, which
 // has at most 24 bits for physical signals, so int32 holds it.
+// round_half_away's rounding in float, for the encoder on a single-precision board.
 inline std::int32_t round_float(float x) {
+  // NOLINTNEXTLINE(bugprone-incorrect-roundings)
   return x < 0 ? -static_cast<std::int32_t>(-x + 0.5f) : static_cast<std::int32_t>(x + 0.5f);
 }
 

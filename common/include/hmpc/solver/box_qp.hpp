@@ -11,9 +11,9 @@
 namespace hmpc {
 
 enum class BoxQpStatus {
-  kConverged,        // projected gradient on the free set below tolerance
-  kAllClamped,       // every variable sits on a bound with the gradient pushing outward
-  kSmallImprovement, // relative improvement below tolerance
+  kConverged,         // projected gradient on the free set below tolerance
+  kAllClamped,        // every variable sits on a bound with the gradient pushing outward
+  kSmallImprovement,  // relative improvement below tolerance
   kMaxIterations,
   kLineSearchFailed,
   kNotPositiveDefinite,  // H restricted to the free set is not positive definite
@@ -47,7 +47,7 @@ struct BoxQpSolution {
 namespace detail {
 template <typename Scalar, int N>
 Eigen::Matrix<Scalar, N, N> mask_clamped(const Eigen::Matrix<Scalar, N, N>& H,
-                                        const Eigen::Matrix<Scalar, N, 1>& free_mask) {
+                                         const Eigen::Matrix<Scalar, N, 1>& free_mask) {
   Eigen::Matrix<Scalar, N, N> masked = H;
   for (int i = 0; i < N; ++i) {
     if (free_mask(i) == Scalar(0)) {
@@ -64,8 +64,8 @@ template <typename Scalar, int N>
 void solve_box_qp(const Eigen::Matrix<Scalar, N, N>& H, const Eigen::Matrix<Scalar, N, 1>& g,
                   const Eigen::Matrix<Scalar, N, 1>& lower,
                   const Eigen::Matrix<Scalar, N, 1>& upper,
-                  const Eigen::Matrix<Scalar, N, 1>& initial_guess,
-                  BoxQpSolution<Scalar, N>& out, const BoxQpConfig<Scalar>& config = {}) {
+                  const Eigen::Matrix<Scalar, N, 1>& initial_guess, BoxQpSolution<Scalar, N>& out,
+                  const BoxQpConfig<Scalar>& config = {}) {
   using Vector = Eigen::Matrix<Scalar, N, 1>;
   const auto objective = [&](const Vector& x) { return x.dot(g) + Scalar(0.5) * x.dot(H * x); };
 
@@ -78,9 +78,9 @@ void solve_box_qp(const Eigen::Matrix<Scalar, N, N>& H, const Eigen::Matrix<Scal
 
   int iteration = 0;
   for (; iteration < config.max_iterations; ++iteration) {
-    if (iteration > 0 && (previous_value - value) < config.min_relative_improvement *
-                                                          (previous_value < 0 ? -previous_value
-                                                                              : previous_value)) {
+    if (iteration > 0 &&
+        (previous_value - value) < config.min_relative_improvement *
+                                       (previous_value < 0 ? -previous_value : previous_value)) {
       out.status = BoxQpStatus::kSmallImprovement;
       break;
     }

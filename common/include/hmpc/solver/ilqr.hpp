@@ -108,10 +108,10 @@ struct LayerWork {
 template <typename Scalar>
 struct SolveResult {
   SolveStatus status = SolveStatus::kInvalidInput;
-  int iterations = 0;                  // backward + forward passes performed
-  Scalar cost = Scalar(0);             // J of the returned plan
-  Scalar initial_cost = Scalar(0);     // J of the warm-start rollout
-  Scalar regularization = Scalar(0);   // mu after the solve
+  int iterations = 0;                 // backward + forward passes performed
+  Scalar cost = Scalar(0);            // J of the returned plan
+  Scalar initial_cost = Scalar(0);    // J of the warm-start rollout
+  Scalar regularization = Scalar(0);  // mu after the solve
   SolveWork work{};
 };
 
@@ -223,8 +223,7 @@ class Ilqr {
     for (int t = 0; t < N; ++t) {
       lower_[t] = problem.control_lower_bound(t);
       upper_[t] = problem.control_upper_bound(t);
-      bounded_ = bounded_ ||
-                 (lower_[t].array() > -std::numeric_limits<Scalar>::infinity()).any() ||
+      bounded_ = bounded_ || (lower_[t].array() > -std::numeric_limits<Scalar>::infinity()).any() ||
                  (upper_[t].array() < std::numeric_limits<Scalar>::infinity()).any();
     }
 
@@ -311,10 +310,11 @@ class Ilqr {
       Scalar reduction = 0;
       for (int first = 0; first < config_.line_search_steps && !accepted && !out_of_time;
            first += lanes) {
-        const int count = config_.line_search_steps - first < lanes
-                              ? config_.line_search_steps - first : lanes;
+        const int count =
+            config_.line_search_steps - first < lanes ? config_.line_search_steps - first : lanes;
         problem.for_each_rollout(count, [&](int lane) {
-          lane_cost_[lane] = rollout_closed_loop(problem, x0, line_search_alpha(first + lane), lane);
+          lane_cost_[lane] =
+              rollout_closed_loop(problem, x0, line_search_alpha(first + lane), lane);
         });
         for (int lane = 0; lane < count; ++lane) work_.rollout_steps += lane_steps_[lane];
         for (int lane = 0; lane < count; ++lane) {
@@ -322,9 +322,9 @@ class Ilqr {
           if (!std::isfinite(lane_cost_[lane])) continue;
           reduction = cost_ - lane_cost_[lane];
           const Scalar expected = -alpha * (expected_linear + alpha * expected_quadratic);
-          const Scalar ratio = expected > Scalar(0) ? reduction / expected
-                                                    : (reduction > Scalar(0) ? Scalar(1)
-                                                                             : Scalar(-1));
+          const Scalar ratio = expected > Scalar(0)
+                                   ? reduction / expected
+                                   : (reduction > Scalar(0) ? Scalar(1) : Scalar(-1));
           if (ratio > config_.min_reduction_ratio && reduction > Scalar(0)) {
             commit_candidate(lane_cost_[lane], lane);
             accepted = true;
@@ -368,9 +368,7 @@ class Ilqr {
   using ControlJacobian = Eigen::Matrix<Scalar, kStateDim, kControlDim>;
   using ControlMatrix = Eigen::Matrix<Scalar, kControlDim, kControlDim>;
 
-  Control clamp(const Control& u, int t) const {
-    return u.cwiseMax(lower_[t]).cwiseMin(upper_[t]);
-  }
+  Control clamp(const Control& u, int t) const { return u.cwiseMax(lower_[t]).cwiseMin(upper_[t]); }
 
   Scalar line_search_alpha(int i) const {
     if (config_.line_search_steps <= 1) return Scalar(1);
@@ -454,12 +452,12 @@ class Ilqr {
       const ControlJacobian& B = fu_[t];
       const RunningDerivatives& l = running_[t];
       const Eigen::Matrix<Scalar, kStateDim, kControlDim> VxxB = Vxx * B;
-      const State Qx = l.lx + A.transpose() * Vx;                               // Eq. 2.7
-      const Control Qu = l.lu + B.transpose() * Vx;                             // Eq. 2.8
-      const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;                // Eq. 2.9
-      const Gain Qux = l.lux + VxxB.transpose() * A;                            // Eq. 2.10
-      const ControlMatrix Quu = l.luu + B.transpose() * VxxB;                   // Eq. 2.11
-      const ControlMatrix Quu_reg = Quu + mu_ * ControlMatrix::Identity();      // LM term
+      const State Qx = l.lx + A.transpose() * Vx;                           // Eq. 2.7
+      const Control Qu = l.lu + B.transpose() * Vx;                         // Eq. 2.8
+      const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;            // Eq. 2.9
+      const Gain Qux = l.lux + VxxB.transpose() * A;                        // Eq. 2.10
+      const ControlMatrix Quu = l.luu + B.transpose() * VxxB;               // Eq. 2.11
+      const ControlMatrix Quu_reg = Quu + mu_ * ControlMatrix::Identity();  // LM term
 
       if (bounded_) {
         // box-DDP: k from the box QP around the nominal control; K on the free set only.
@@ -472,14 +470,14 @@ class Ilqr {
       } else {
         llt_.compute(Quu_reg);
         if (llt_.info() != Eigen::Success) return false;
-        k_[t] = -llt_.solve(Qu);                                                 // Eq. 2.12
+        k_[t] = -llt_.solve(Qu);  // Eq. 2.12
         for (int j = 0; j < kStateDim; ++j) K_[t].col(j) = -llt_.solve(Qux.col(j));
       }
       const Control& k = k_[t];
       const Gain& K = K_[t];
       if (!k.allFinite() || !K.allFinite()) return false;
 
-      expected_linear += k.dot(Qu);                                              // Eq. 2.14
+      expected_linear += k.dot(Qu);  // Eq. 2.14
       expected_quadratic += Scalar(0.5) * k.dot(Quu * k);
       // Eqs. 2.15-2.16 in the form that stays exact when k, K are not the unconstrained
       // minimisers (clamped directions, regularisation): Tassa et al. 2012, Eq. 11.
@@ -523,15 +521,15 @@ class Ilqr {
   Scalar cost_ = 0;
   SolveWork work_{};
 
-  StateTrajectory x_;       // nominal (best so far)
+  StateTrajectory x_;  // nominal (best so far)
   ControlTrajectory u_;
   // Line-search candidates, one per rollout lane (Problem::kRolloutLanes).
   std::array<StateTrajectory, kLanes> x_new_;
   std::array<ControlTrajectory, kLanes> u_new_;
   std::array<Scalar, kLanes> lane_cost_{};
   std::array<std::int32_t, kLanes> lane_steps_{};  // rollout steps each lane completed
-  std::array<Control, N> k_;  // feedforward, Eq. 2.12
-  GainTrajectory K_;          // feedback, Eq. 2.12
+  std::array<Control, N> k_;                       // feedforward, Eq. 2.12
+  GainTrajectory K_;                               // feedback, Eq. 2.12
   std::array<StateJacobian, N> fx_;
   std::array<ControlJacobian, N> fu_;
   std::array<RunningDerivatives, N> running_;

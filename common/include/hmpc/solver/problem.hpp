@@ -63,10 +63,8 @@ class ProblemBase {
   void dynamics_derivatives(const State& x, const Control& u, int t, StateJacobian& fx,
                             ControlJacobian& fu) const {
     const Derived& self = derived();
-    central_difference_jacobian(
-        [&](const State& xp) { return self.dynamics(xp, u, t); }, x, fx);
-    central_difference_jacobian(
-        [&](const Control& up) { return self.dynamics(x, up, t); }, u, fu);
+    central_difference_jacobian([&](const State& xp) { return self.dynamics(xp, u, t); }, x, fx);
+    central_difference_jacobian([&](const Control& up) { return self.dynamics(x, up, t); }, u, fu);
   }
 
   // l_x, l_u, l_xx, l_uu, l_ux by central differences of Derived::running_cost.

@@ -1,6 +1,7 @@
 // The linker sends the program's calls to malloc & co. to the __wrap_ functions below (the
-// hmpc::heap_monitor target carries the --wrap options). Calls made inside shared libraries bypass --wrap, libstdc++'s operator new
-// among them, so operator new is replaced here to allocate through the wrapped malloc.
+// hmpc::heap_monitor target carries the --wrap options). Calls made inside shared libraries bypass
+// --wrap, libstdc++'s operator new among them, so operator new is replaced here to allocate through
+// the wrapped malloc.
 #include "hmpc/platform/linux/heap_monitor.hpp"
 
 #include <atomic>
@@ -25,6 +26,9 @@ void disarm() { g_armed.store(false); }
 std::uint64_t allocations() { return g_allocations.load(); }
 }  // namespace hmpc::platform::heap_monitor
 
+// The linker's --wrap=SYMBOL sends calls to SYMBOL to __wrap_SYMBOL and __real_SYMBOL to the
+// original: the reserved names are its interface.
+// NOLINTBEGIN(bugprone-reserved-identifier)
 extern "C" {
 void* __real_malloc(std::size_t);
 void* __real_calloc(std::size_t, std::size_t);
@@ -52,6 +56,7 @@ int __wrap_posix_memalign(void** pointer, std::size_t alignment, std::size_t siz
   note_allocation();
   return __real_posix_memalign(pointer, alignment, size);
 }
+// NOLINTEND(bugprone-reserved-identifier)
 }
 
 void* operator new(std::size_t size) {

@@ -100,8 +100,7 @@ class ForearmCanMaster {
         if (receiver_.decode(frame, report_.telemetry) != proto::DecodeResult::kOk) return false;
         ++report_.telemetry_frames;
         return true;
-      default:
-        return false;
+      default: return false;
     }
   }
 

@@ -14,10 +14,10 @@ const char* to_string(Method method);
 
 struct StepRecord {
   double time = 0;
-  double y = 0, z = 0;     // plant state at the start of the sample
-  double u1 = 0, u2 = 0;   // applied input
+  double y = 0, z = 0;    // plant state at the start of the sample
+  double u1 = 0, u2 = 0;  // applied input
   double solve_seconds = 0;
-  int iterations = 0;        // iLQR iterations of all layers in this update
+  int iterations = 0;  // iLQR iterations of all layers in this update
   bool plan_usable = true;
 };
 
@@ -28,7 +28,7 @@ struct RunResult {
   double accumulated_cost = 0;  // sum over samples of Eq. 2.38's stage cost times Delta t
   double max_solve_seconds = 0;
   double median_solve_seconds = 0;
-  int unusable_solves = 0;      // solves whose plan could not be applied
+  int unusable_solves = 0;  // solves whose plan could not be applied
 };
 
 struct RunOptions {

@@ -64,9 +64,9 @@ struct ClosedLoopConfig {
 // One 30 ms sampling period, of the biped (A = 0) or the robot with an arm (A = 1).
 template <int A>
 struct BasicClosedLoopSample {
-  double time = 0.0;      // [s], at the end of the period
-  BasicState<A> state;    // simulated, at the end of the period
-  BaseFeatures base;      // of `state`
+  double time = 0.0;           // [s], at the end of the period
+  BasicState<A> state;         // simulated, at the end of the period
+  BaseFeatures base;           // of `state`
   BasicJointVector<A> torque;  // the input applied during the period's first 10 ms [N m]
   // Vertical ground (and seat) force on each foot and on the seat points [N] (left, right,
   // seat), averaged over the period's 1 ms simulator steps (each step's force at its start):
@@ -77,7 +77,7 @@ struct BasicClosedLoopSample {
   int iterations = 0;          // the (upper) layer's
   int fast_iterations = 0;     // Coarse-Fast's lower layer's
   bool plan_usable = false;
-  bool truncated = false;      // the solve was stopped at the sampling time
+  bool truncated = false;  // the solve was stopped at the sampling time
   // Sec. 4.3.1's running cost l(x, u, t) integrated over the period on the 1 ms simulator,
   // in units of coarse steps (divided by 30 ms), so that a period adds what one coarse-step
   // term of the MPC's objective would.
@@ -95,9 +95,9 @@ using ClosedLoopSample = BasicClosedLoopSample<0>;
 using ClosedLoopRun = BasicClosedLoopRun<0>;
 using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 
-// Runs `motion` from standing_state at ClosedLoopConfig::start_height, on the biped (A = 0) or, for a reaching
-// motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument for a
-// negative or non-finite duration, threads outside 1..64, an iteration cap outside 0..1000, a
+// Runs `motion` from standing_state at ClosedLoopConfig::start_height, on the biped (A = 0) or, for
+// a reaching motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument
+// for a negative or non-finite duration, threads outside 1..64, an iteration cap outside 0..1000, a
 // start height outside 0.3..1.5 m, or a motion that needs the other robot.
 template <int A = 0>
 BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);

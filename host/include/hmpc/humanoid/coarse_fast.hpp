@@ -46,7 +46,8 @@ using CoarseFast = BasicCoarseFast<0>;
 // The MPC for `motion` from `initial` (`config`'s step is overridden per layer, its contact
 // gets the motion's chair). `pool` may be null (serial) and must outlive the MPC.
 template <int A>
-std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion, const BasicState<A>& initial,
-                                                     ThreadPool* pool, ProblemConfig config = ProblemConfig{});
+std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
+                                                     const BasicState<A>& initial, ThreadPool* pool,
+                                                     ProblemConfig config = ProblemConfig{});
 
 }  // namespace hmpc::humanoid

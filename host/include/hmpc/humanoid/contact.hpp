@@ -60,9 +60,9 @@ struct ContactParameters {
   // Chair (motion IV): a horizontal seat at `seat_height` for x in [seat_x_min, seat_x_max]
   // (world), the window's edges smoothed over `seat_edge` (C-infinity, logistic).
   bool chair = false;
-  double seat_height = 0.45;  // [m]
+  double seat_height = 0.45;                     // [m]
   double seat_x_min = -0.30, seat_x_max = 0.30;  // [m]
-  double seat_edge = 5e-3;    // [m]
+  double seat_edge = 5e-3;                       // [m]
   // Seat points (choice): the ischial tuberosities, which carry most of a seated person's
   // load, 8 cm below and 4 cm behind the mid-hip point and 5.5 cm to each side; and two points
   // per thigh on its posterior surface, 7 cm from the femur axis (half the thigh's
@@ -71,12 +71,13 @@ struct ContactParameters {
   double thigh_half_depth = 0.07;
 };
 
-constexpr int kFootPoints = 4;                    // heel and toe corners, per foot
-constexpr int kSolePoints = 2 * kFootPoints;      // 8, indices 0-3 left foot, 4-7 right foot
-constexpr int kSeatPoints = 6;                    // two ischia, two per thigh
+constexpr int kFootPoints = 4;                // heel and toe corners, per foot
+constexpr int kSolePoints = 2 * kFootPoints;  // 8, indices 0-3 left foot, 4-7 right foot
+constexpr int kSeatPoints = 6;                // two ischia, two per thigh
 constexpr int kContactPoints = kSolePoints + kSeatPoints;
 
-template <int A> using BasicPointJacobian = Eigen::Matrix<double, 3, Dimensions<A>::kDofs>;
+template <int A>
+using BasicPointJacobian = Eigen::Matrix<double, 3, Dimensions<A>::kDofs>;
 
 struct ContactPoint {
   int body = 0;
@@ -87,7 +88,7 @@ struct ContactPoint {
 template <int ArmJoints>
 struct BasicContactState {
   int count = 0;  // active points: kSolePoints, or kContactPoints with the chair
-  std::array<Vector3, kContactPoints> position, velocity, force;  // world
+  std::array<Vector3, kContactPoints> position, velocity, force;       // world
   std::array<BasicPointJacobian<ArmJoints>, kContactPoints> jacobian;  // p_dot = J v
   // df / dp_dot, symmetric negative semi-definite (see ContactModel::point_force).
   std::array<Matrix3, kContactPoints> force_velocity;
@@ -101,7 +102,8 @@ class BasicContactModel {
   using Velocity = BasicVelocity<ArmJoints>;
   using ContactState = BasicContactState<ArmJoints>;
 
-  explicit BasicContactModel(const Model& model = Model{}, const Parameters& parameters = Parameters{},
+  explicit BasicContactModel(const Model& model = Model{},
+                             const Parameters& parameters = Parameters{},
                              const ContactParameters& contact = ContactParameters{});
 
   const ContactParameters& parameters() const { return contact_; }
@@ -112,7 +114,8 @@ class BasicContactModel {
   // kinematics computed at the same state.
   void evaluate(const Kinematics& kinematics, const Velocity& v, ContactState& out) const;
   // The same for point i only (out's entries i).
-  void evaluate_point(int i, const Kinematics& kinematics, const Velocity& v, ContactState& out) const;
+  void evaluate_point(int i, const Kinematics& kinematics, const Velocity& v,
+                      ContactState& out) const;
   // Force on point i at a world position and velocity, and its velocity derivative (as
   // point_force's).
   Vector3 force_at(int i, const Vector3& position, const Vector3& velocity, Matrix3& dforce) const;
@@ -140,8 +143,9 @@ class BasicContactModel {
 
 // Jacobian of a point fixed on `body` at `local` (body coordinates): p_dot = J v, p world.
 template <int A>
-BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model, const BasicKinematics<A>& kinematics,
-                                     int body, const Vector3& local);
+BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model,
+                                     const BasicKinematics<A>& kinematics, int body,
+                                     const Vector3& local);
 
 // sum of the active points' vertical forces, split into soles and seat.
 struct VerticalLoad {

@@ -34,9 +34,9 @@ using Matrix6 = Eigen::Matrix<double, 6, 6>;
 template <int ArmJoints>
 struct BasicKinematics {
   static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
-  std::array<Matrix3, kBodies> rotation;   // body to world
-  std::array<Vector3, kBodies> position;   // body origin in world
-  std::array<Vector6, kBodies> velocity;   // spatial velocity (omega, v_origin), body coords
+  std::array<Matrix3, kBodies> rotation;  // body to world
+  std::array<Vector3, kBodies> position;  // body origin in world
+  std::array<Vector6, kBodies> velocity;  // spatial velocity (omega, v_origin), body coords
 };
 
 template <int ArmJoints>
@@ -75,11 +75,11 @@ class BasicDynamics {
  private:
   static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
   Model model_;
-  std::array<Matrix6, kBodies> inertia_;     // spatial inertia about the body origin
-  std::array<Vector6, kBodies> subspace_;    // motion subspace S of revolute joints
+  std::array<Matrix6, kBodies> inertia_;   // spatial inertia about the body origin
+  std::array<Vector6, kBodies> subspace_;  // motion subspace S of revolute joints
   // Workspace.
-  Configuration configuration_;              // of set_configuration()
-  std::array<Matrix6, kBodies> transform_;   // X from parent (or world) to body coordinates
+  Configuration configuration_;             // of set_configuration()
+  std::array<Matrix6, kBodies> transform_;  // X from parent (or world) to body coordinates
   std::array<Vector6, kBodies> velocity_, acceleration_, force_;
   std::array<Matrix6, kBodies> composite_;
   MassMatrix mass_matrix_;

@@ -72,8 +72,7 @@ class FastSubsystem
   using FullControl = BasicJointVector<ArmJoints>;
 
   // config.step is Delta t_f. `pool` (may be null: serial) must outlive the problem.
-  FastSubsystem(const CostWeights& weights, const ProblemConfig& config,
-                ThreadPool* pool = nullptr)
+  FastSubsystem(const CostWeights& weights, const ProblemConfig& config, ThreadPool* pool = nullptr)
       : Base(config, pool), weights_(weights), config_(config) {
     const BasicModel<ArmJoints> model(config.parameters);
     limit_ = model.torque_limit;
@@ -100,7 +99,6 @@ class FastSubsystem
     return with_fast_part(x_hat_[j], fast_part(x_hat_[j]) + zeta);
   }
 
-
   // fz = dzeta_{j+1} / dzeta_j = dz+ / dz (z_hat is fixed), from the step map's
   // linearisation, or by whole-step central differences (ProblemConfig::linearisation).
   void dynamics_derivatives(const State& zeta, const Control& nu, int j, StateJacobian& fz,
@@ -108,8 +106,8 @@ class FastSubsystem
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(zeta, nu, j, fz, fu);
     } else {
-      this->step_map(j).linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step, fz,
-                                   fu);
+      this->step_map(j).linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu,
+                                         config_.step, fz, fu);
     }
   }
 

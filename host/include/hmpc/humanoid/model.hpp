@@ -41,44 +41,48 @@ template <int ArmJoints>
 struct Dimensions {
   static_assert(ArmJoints == 0 || ArmJoints == 1, "the humanoid has no arm or a one-joint arm");
   static constexpr int kArmJoints = ArmJoints;
-  static constexpr int kJoints = kLegJoints + ArmJoints;          // 8 or 9
-  static constexpr int kDofs = kBaseDofs + kJoints;               // dim v: 14 or 15
-  static constexpr int kConfigurationSize = 7 + kJoints;          // dim q: 15 or 16
-  static constexpr int kStateSize = kConfigurationSize + kDofs;   // n: 29 or 31
+  static constexpr int kJoints = kLegJoints + ArmJoints;         // 8 or 9
+  static constexpr int kDofs = kBaseDofs + kJoints;              // dim v: 14 or 15
+  static constexpr int kConfigurationSize = 7 + kJoints;         // dim q: 15 or 16
+  static constexpr int kStateSize = kConfigurationSize + kDofs;  // n: 29 or 31
   // torso + per leg (hip link, thigh, shank, foot) + the arm
   static constexpr int kBodies = 1 + 2 * kJointsPerLeg + ArmJoints;
-  static constexpr int kArmBody = 1 + 2 * kJointsPerLeg;         // the arm's, if it has one
-  static constexpr int kArmJoint = kLegJoints;                   // its joint index
+  static constexpr int kArmBody = 1 + 2 * kJointsPerLeg;  // the arm's, if it has one
+  static constexpr int kArmJoint = kLegJoints;            // its joint index
 };
 
 using Vector3 = Eigen::Vector3d;
 using Matrix3 = Eigen::Matrix3d;
-template <int A> using BasicConfiguration = Eigen::Matrix<double, Dimensions<A>::kConfigurationSize, 1>;
-template <int A> using BasicVelocity = Eigen::Matrix<double, Dimensions<A>::kDofs, 1>;
-template <int A> using BasicJointVector = Eigen::Matrix<double, Dimensions<A>::kJoints, 1>;
-template <int A> using BasicMassMatrix = Eigen::Matrix<double, Dimensions<A>::kDofs, Dimensions<A>::kDofs>;
+template <int A>
+using BasicConfiguration = Eigen::Matrix<double, Dimensions<A>::kConfigurationSize, 1>;
+template <int A>
+using BasicVelocity = Eigen::Matrix<double, Dimensions<A>::kDofs, 1>;
+template <int A>
+using BasicJointVector = Eigen::Matrix<double, Dimensions<A>::kJoints, 1>;
+template <int A>
+using BasicMassMatrix = Eigen::Matrix<double, Dimensions<A>::kDofs, Dimensions<A>::kDofs>;
 
 // Body i > 0 is moved by joint i - 1 (velocity index kBaseDofs + i - 1); body 0 is the torso.
 // Leg bodies are numbered leg * 4 + 1 + LegJoint (left leg 0, right leg 1), then the arm.
 struct Body {
-  int parent = -1;                       // -1: the world (floating base)
-  Vector3 axis = Vector3::Zero();        // revolute axis, parent and body coordinates
+  int parent = -1;                         // -1: the world (floating base)
+  Vector3 axis = Vector3::Zero();          // revolute axis, parent and body coordinates
   Vector3 joint_origin = Vector3::Zero();  // in parent coordinates, at zero joint angle
-  double mass = 0.0;                     // [kg]
-  Vector3 com = Vector3::Zero();         // centre of mass, body coordinates [m]
-  Matrix3 inertia = Matrix3::Zero();     // rotational inertia about the CoM [kg m^2]
+  double mass = 0.0;                       // [kg]
+  Vector3 com = Vector3::Zero();           // centre of mass, body coordinates [m]
+  Matrix3 inertia = Matrix3::Zero();       // rotational inertia about the CoM [kg m^2]
 };
 
 template <int ArmJoints>
 struct BasicModel {
   using JointVector = BasicJointVector<ArmJoints>;
   std::array<Body, Dimensions<ArmJoints>::kBodies> bodies;
-  Vector3 gravity;                       // world coordinates
-  Vector3 vertex;                        // top of the head, torso coordinates
-  Vector3 hand = Vector3::Zero();        // the hand's centre (Eq. 2.53's p_hand), arm coordinates
-  double sole_height;                    // sole plane below the ankle joint (foot frame z)
+  Vector3 gravity;                 // world coordinates
+  Vector3 vertex;                  // top of the head, torso coordinates
+  Vector3 hand = Vector3::Zero();  // the hand's centre (Eq. 2.53's p_hand), arm coordinates
+  double sole_height;              // sole plane below the ankle joint (foot frame z)
   JointVector joint_lower, joint_upper, torque_limit;
-  JointVector armature;                  // reflected actuator inertia (Parameters::armature)
+  JointVector armature;  // reflected actuator inertia (Parameters::armature)
 
   explicit BasicModel(const Parameters& p = Parameters{});
 

@@ -48,14 +48,14 @@
 namespace hmpc::humanoid {
 
 struct CostWeights {
-  std::array<double, 4> control{};  // w_HAA, w_HFE, w_KFE, w_AFE (Eq. 4.32)
+  std::array<double, 4> control{};                     // w_HAA, w_HFE, w_KFE, w_AFE (Eq. 4.32)
   Eigen::Vector4d attitude = Eigen::Vector4d::Zero();  // w_q1, w_q2, w_q3 (vector), w_q4
   double height = 0.0;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // w_vx, w_vy, w_vz
   double alpha = 0.0, beta = 0.0;
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // w_omega_x, _y, _z
   double fast = 0.0, fast_control = 0.0;  // Eq. 2.52 and the deviation nu's weight
-  double foot = 0.0;                       // foot heights (Gait)
+  double foot = 0.0;                      // foot heights (Gait)
   // Joint-angle tracking, l_joint = w_joint |q_joints - Phase::joints|^2 over the legs' joints:
   // the tracking MPC that reproduces a retargeted demonstration on the robot (Sec. 4.2.1,
   // hmpc/ioc/retargeting.hpp). Not in a motion file (always 0 there).
@@ -87,18 +87,18 @@ struct Gait {
 // Whole-body reaching (Sec. 2.6.1, Eq. 2.53): l_reach = w_reach |p_reach - p_hand|^2 from
 // `start` on, p_hand the hand's centre (Model::hand).
 struct Reach {
-  bool active = false;  // the motion file has a [reach] section
+  bool active = false;                               // the motion file has a [reach] section
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  // p_reach [m]
-  double start = 0.0;    // [s]
-  double weight = 0.0;   // w_reach
+  double start = 0.0;                                // [s]
+  double weight = 0.0;                               // w_reach
   double control = 0.0;  // the shoulder torque's weight in W_control (Eq. 4.24)
 };
 
 struct Phase {
-  double start = 0.0;                                   // [s]
-  Eigen::Vector3d attitude = Eigen::Vector3d::Zero();   // roll, pitch, yaw [rad]
-  double height = 0.0;                                  // [m]
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   // [m/s]
+  double start = 0.0;                                  // [s]
+  Eigen::Vector3d attitude = Eigen::Vector3d::Zero();  // roll, pitch, yaw [rad]
+  double height = 0.0;                                 // [m]
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // [m/s]
   // The legs' joint angles for CostWeights::joint (left leg first, LegJoint order) [rad].
   std::array<double, 8> joints{};
 };
@@ -117,7 +117,7 @@ struct Motion {
   double model_substep = 0.0;  // [s] the MPC model's sub-step; 0: ProblemConfig's default
   bool chair = false;
   double seat_height = 0.0, seat_x_min = 0.0, seat_x_max = 0.0;  // [m], when `chair`
-  Gait gait;  // period 0: none
+  Gait gait;                                                     // period 0: none
   CostWeights weights;
   Reach reach;  // not active: the biped's motions I-VIII
   std::array<Phase, kMaxPhases> phases{};

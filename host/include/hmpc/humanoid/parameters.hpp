@@ -21,21 +21,27 @@ namespace hmpc::humanoid {
 // segment's principal axes: sagittal (antero-posterior), transverse (medio-lateral) and
 // longitudinal (along the segment).
 struct Segment {
-  double mass_fraction;          // of total body mass
-  double com_from_proximal;      // centre of mass, fraction of length from the proximal end
-  double reference_length;       // [m] mean length of de Leva's female reference subject
+  double mass_fraction;      // of total body mass
+  double com_from_proximal;  // centre of mass, fraction of length from the proximal end
+  double reference_length;   // [m] mean length of de Leva's female reference subject
   double gyration_sagittal;
   double gyration_transverse;
   double gyration_longitudinal;
 };
 
 // Joint order within one leg, the same for both legs (q and v list the left leg first).
-enum LegJoint : int { kHipAbduction = 0, kHipFlexion = 1, kKnee = 2, kAnkle = 3, kJointsPerLeg = 4 };
+enum LegJoint : int {
+  kHipAbduction = 0,
+  kHipFlexion = 1,
+  kKnee = 2,
+  kAnkle = 3,
+  kJointsPerLeg = 4
+};
 
 struct Parameters {
-  double stature = 1.59;     // [m] thesis Sec. 2.5.1
-  double body_mass = 47.0;   // [kg] thesis Sec. 2.5.1
-  double gravity = 9.81;     // [m/s^2]
+  double stature = 1.59;             // [m] thesis Sec. 2.5.1
+  double body_mass = 47.0;           // [kg] thesis Sec. 2.5.1
+  double gravity = 9.81;             // [m/s^2]
   double reference_stature = 1.735;  // [m] de Leva (1996), female reference subject
 
   // de Leva (1996), female: {mass, CoM from proximal, length [m], r_sag, r_trans, r_long}.
@@ -65,16 +71,14 @@ struct Parameters {
   // Ranges of motion [rad], per LegJoint, for both legs: normal adult values of the American
   // Academy of Orthopaedic Surgeons (Greene & Heckman 1994). Positive = abduction, hip
   // flexion, knee flexion, ankle dorsiflexion (see model.hpp for the axes).
-  std::array<double, kJointsPerLeg> joint_lower{
-      -0.5236,   // hip adduction 30 deg
-      -0.5236,   // hip extension 30 deg
-      0.0,       // knee fully extended
-      -0.8727};  // ankle plantarflexion 50 deg
-  std::array<double, kJointsPerLeg> joint_upper{
-      0.7854,    // hip abduction 45 deg
-      2.0944,    // hip flexion 120 deg
-      2.3562,    // knee flexion 135 deg
-      0.3491};   // ankle dorsiflexion 20 deg
+  std::array<double, kJointsPerLeg> joint_lower{-0.5236,   // hip adduction 30 deg
+                                                -0.5236,   // hip extension 30 deg
+                                                0.0,       // knee fully extended
+                                                -0.8727};  // ankle plantarflexion 50 deg
+  std::array<double, kJointsPerLeg> joint_upper{0.7854,    // hip abduction 45 deg
+                                                2.0944,    // hip flexion 120 deg
+                                                2.3562,    // knee flexion 135 deg
+                                                0.3491};   // ankle dorsiflexion 20 deg
 
   // End stops at the range-of-motion limits, as in a human joint's ligaments and bone contact
   // (the thesis's model has none; without them the optimiser spun the light feet through
@@ -118,10 +122,10 @@ struct Parameters {
   // 60 deg (Greene & Heckman 1994, as the legs'). Torque limit (choice): 30 N m, five times
   // the 5.4 N m that holds the straight arm (2.1 kg, centre of mass 0.26 m from the shoulder)
   // horizontal. Armature as the legs' joints.
-  double arm_lower = -1.0472;       // [rad] extension 60 deg
-  double arm_upper = 3.1416;        // [rad] flexion 180 deg
-  double arm_torque_limit = 30.0;   // [N m]
-  double arm_armature = 0.05;       // [kg m^2]
+  double arm_lower = -1.0472;      // [rad] extension 60 deg
+  double arm_upper = 3.1416;       // [rad] flexion 180 deg
+  double arm_torque_limit = 30.0;  // [N m]
+  double arm_armature = 0.05;      // [kg m^2]
 };
 
 }  // namespace hmpc::humanoid

@@ -37,7 +37,8 @@ struct PhysicalCheck {
 std::string motion_numeral(const std::string& name);
 
 // The check for motion `numeral` (I..VIII). An unknown numeral fails with a verdict saying so.
-PhysicalCheck check_motion(const std::string& numeral, const Motion& motion, const ClosedLoopRun& run);
+PhysicalCheck check_motion(const std::string& numeral, const Motion& motion,
+                           const ClosedLoopRun& run);
 
 // The highest base point of a run [m] (VII against V).
 double apex_height(const ClosedLoopRun& run);
@@ -48,7 +49,7 @@ constexpr double kReachTolerance = 0.05;  // [m] hand to target, see above
 // kReachTolerance (both in seconds after the start; -1 if never): the latter is our analogue
 // of the thesis's reaching time (Sec. 2.6.3: 1.66 s from the start to the smallest distance).
 struct ReachFigures {
-  double closest = -1.0;       // [m]
+  double closest = -1.0;        // [m]
   double closest_after = -1.0;  // [s]
   double within_after = -1.0;   // [s]
 };

@@ -49,9 +49,11 @@
 
 namespace hmpc::humanoid {
 
-template <int A> using BasicStateVector = Eigen::Matrix<double, Dimensions<A>::kStateSize, 1>;
 template <int A>
-using BasicStateMatrix = Eigen::Matrix<double, Dimensions<A>::kStateSize, Dimensions<A>::kStateSize>;
+using BasicStateVector = Eigen::Matrix<double, Dimensions<A>::kStateSize, 1>;
+template <int A>
+using BasicStateMatrix =
+    Eigen::Matrix<double, Dimensions<A>::kStateSize, Dimensions<A>::kStateSize>;
 using StateMatrix = BasicStateMatrix<0>;
 
 template <int A>
@@ -133,7 +135,8 @@ class BasicStateCost {
   BaseFeatures features(const State& x) const;
   CostResidual residual(const StateVector& x, double time) const;
   double value(const StateVector& x, double time) const { return residual(x, time).squaredNorm(); }
-  using ResidualJacobian = Eigen::Matrix<double, kCostResiduals<ArmJoints>, Dimensions<ArmJoints>::kStateSize>;
+  using ResidualJacobian =
+      Eigen::Matrix<double, kCostResiduals<ArmJoints>, Dimensions<ArmJoints>::kStateSize>;
   // J = dr/dx by central differences (the residual's entries, in the file comment's terms).
   void residual_jacobian(const StateVector& x, double time, ResidualJacobian& J) const;
   // Gauss-Newton gradient and Hessian of value() (see the file comment).
@@ -145,7 +148,8 @@ class BasicStateCost {
  private:
   Motion motion_;
   Vector3 base_point_;
-  std::array<Vector3, 4> sole_points_;  // heel and toe edge centres in foot coordinates, as sole_height
+  std::array<Vector3, 4>
+      sole_points_;  // heel and toe edge centres in foot coordinates, as sole_height
   double beta_left_init_ = 0.0, beta_right_init_ = 0.0;
   BasicDynamics<ArmJoints> dynamics_;  // kinematics only (a const member function)
 };
@@ -174,6 +178,8 @@ class StepMapProblem : public ProblemBase<Derived, double, Nx, Nu> {
   void for_each_step(int count, const StepFunction& linearize) const {
     run_on(pool_, count, linearize);
   }
+  // Hides ProblemBase's 1 on purpose: the solver reads it from the problem type (problem.hpp).
+  // cppcheck-suppress duplInheritedMember
   static constexpr int kRolloutLanes = 2;
   int rollout_lanes() const { return rollout_lanes_on(pool_, lanes_); }
   State rollout_dynamics(const State& x, const Control& u, int t, int lane) const {
@@ -279,7 +285,8 @@ class HumanoidProblem
 };
 
 // `contact` with the motion's chair, if it has one.
-ContactParameters contact_for(const Motion& motion, ContactParameters contact = ContactParameters{});
+ContactParameters contact_for(const Motion& motion,
+                              ContactParameters contact = ContactParameters{});
 // The MPC's model of `motion`: `config` with the motion's contact surfaces (contact_for) and,
 // if the motion asks for one, its model sub-step (Motion::model_substep).
 ProblemConfig model_config(const Motion& motion, ProblemConfig config);

@@ -14,14 +14,14 @@
 // with D_i = df_i / dp_dot (ContactModel::point_force). The end stops enter the same way, per
 // joint j, with K_j and B_j their stiffness and damping (joint_stop): h B_j + h^2 K_j added to
 // A's diagonal and h (tau_stop + h (-K_j) qdot_j) to the bracket, linearly implicit in both
-// the spring and the damper, so that a stiff stop needs no shorter sub-step. (S1) is one Newton step of backward
-// Euler on the contact damping and friction (as in MuJoCo's implicit damping): friction's
-// viscous slope mu F_n / v_s = 4.6e3 N s/m per point makes explicit Euler unstable at a free
-// foot (h b / m ~ 30 for 0.61 kg at h = 1 ms), while the implicit form is stable for any
-// h (D is negative semi-definite, so the matrix stays symmetric positive definite). The
-// spring part stays explicit: it is what the sub-step bounds, omega h <= 0.2 for a foot on
-// its 4 points (contact.hpp). (S2) moves the quaternion on the unit sphere by the exponential
-// map of the body angular velocity (quat_dot = quat (x) (0, omega) / 2, model.hpp).
+// the spring and the damper, so that a stiff stop needs no shorter sub-step. (S1) is one Newton
+// step of backward Euler on the contact damping and friction (as in MuJoCo's implicit damping):
+// friction's viscous slope mu F_n / v_s = 4.6e3 N s/m per point makes explicit Euler unstable at a
+// free foot (h b / m ~ 30 for 0.61 kg at h = 1 ms), while the implicit form is stable for any h (D
+// is negative semi-definite, so the matrix stays symmetric positive definite). The spring part
+// stays explicit: it is what the sub-step bounds, omega h <= 0.2 for a foot on its 4 points
+// (contact.hpp). (S2) moves the quaternion on the unit sphere by the exponential map of the body
+// angular velocity (quat_dot = quat (x) (0, omega) / 2, model.hpp).
 //
 // Sub-steps: dt is split into ceil(dt / max_substep) equal sub-steps, max_substep = 1 ms by
 // default: the HIL and thesis simulator step (Sec. 2.7), and 5x inside the stability bound
@@ -100,10 +100,10 @@ class BasicStepMap {
   using ContactState = BasicContactState<ArmJoints>;
   using PointJacobian = BasicPointJacobian<ArmJoints>;
   using StateVector = Eigen::Matrix<double, kStateSize, 1>;
-  using StepJacobian = Eigen::Matrix<double, kStateSize, kStateSize>;               // dx+ / dx
-  using StepControlJacobian = Eigen::Matrix<double, kStateSize, kJoints>;           // dx+ / dtau
+  using StepJacobian = Eigen::Matrix<double, kStateSize, kStateSize>;                 // dx+ / dx
+  using StepControlJacobian = Eigen::Matrix<double, kStateSize, kJoints>;             // dx+ / dtau
   using JointStepJacobian = Eigen::Matrix<double, kJointStateSize, kJointStateSize>;  // dz+ / dz
-  using JointControlJacobian = Eigen::Matrix<double, kJointStateSize, kJoints>;     // dz+ / dtau
+  using JointControlJacobian = Eigen::Matrix<double, kJointStateSize, kJoints>;       // dz+ / dtau
 
   static constexpr double kMaxRotation = 0.2;  // [rad] per sub-step, see above
   static constexpr int kMaxRefinement = 1000;

@@ -35,13 +35,14 @@ class ThreadPool {
   // done. Not reentrant: one for_each at a time.
   template <class Task>
   void for_each(int count, const Task& task) {
-    run(count, [](const void* context, int i) { (*static_cast<const Task*>(context))(i); }, &task);
+    run(
+        count, [](const void* context, int i) { (*static_cast<const Task*>(context))(i); }, &task);
   }
 
  private:
   using Call = void (*)(const void*, int);
   void run(int count, Call call, const void* context);
-  void work();        // takes indices until none are left
+  void work();  // takes indices until none are left
   void worker_loop();
 
   std::vector<std::thread> workers_;

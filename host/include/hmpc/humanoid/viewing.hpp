@@ -29,7 +29,8 @@ StickFigure stick_figure(const BasicState<A>& x, const ProblemConfig& config = P
 // robot with an arm its joint and torque after the legs', and at the end the hand's position
 // and the reach target.
 template <int A>
-void write_trajectory_csv(std::ostream& out, const Motion& motion, const BasicClosedLoopRun<A>& run);
+void write_trajectory_csv(std::ostream& out, const Motion& motion,
+                          const BasicClosedLoopRun<A>& run);
 
 // Columns of trajectory.csv that scripts plot, 1-based as gnuplot counts: the base point's
 // height and velocity, the torso quaternion (w, x, y, z from kQuaternionColumn), and the

@@ -14,8 +14,9 @@ namespace hmpc::ioc {
 // of `motion` (closed_loop.hpp), as one-window demonstrations: the MPC's computation replayed
 // along the run's states, so plan k is the one whose first input the run applied in sample k.
 // `problem` is the run's ClosedLoopConfig::problem. `pool` may be null.
-std::vector<Demonstration> coarse_mpc_plans(const humanoid::Motion& motion, const humanoid::ClosedLoopRun& run,
-                                            const humanoid::ProblemConfig& problem = humanoid::ProblemConfig{},
-                                            humanoid::ThreadPool* pool = nullptr);
+std::vector<Demonstration> coarse_mpc_plans(
+    const humanoid::Motion& motion, const humanoid::ClosedLoopRun& run,
+    const humanoid::ProblemConfig& problem = humanoid::ProblemConfig{},
+    humanoid::ThreadPool* pool = nullptr);
 
 }  // namespace hmpc::ioc

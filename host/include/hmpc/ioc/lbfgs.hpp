@@ -12,7 +12,7 @@
 namespace hmpc::ioc {
 
 struct LbfgsConfig {
-  int memory = 8;            // pairs (s, y) kept; 3-20 is the usual range (Nocedal & Wright)
+  int memory = 8;  // pairs (s, y) kept; 3-20 is the usual range (Nocedal & Wright)
   int max_iterations = 100;
   // Converged when |grad f|_inf <= gradient_tolerance * max(1, |f|), or when an iteration
   // lowers f by less than value_tolerance * max(1, |f|).

@@ -51,7 +51,7 @@
 
 namespace hmpc::ioc {
 
-constexpr int kWindowSteps = humanoid::kCoarseHorizon;                  // N
+constexpr int kWindowSteps = humanoid::kCoarseHorizon;  // N
 constexpr int kResiduals = humanoid::kCostResiduals<0>;
 
 // A demonstration at the coarse step Delta t_c: states x_0..x_T and the inputs u_0..u_{T-1},
@@ -70,14 +70,16 @@ Demonstration demonstration_of(const humanoid::ClosedLoopRun& run);
 // One window, linearised once: everything the likelihood needs for any weights. Index t - 1
 // holds step t = 1..N.
 struct Window {
-  std::array<humanoid::StepJacobian, kWindowSteps> A;         // dx_{t+1} / dx_t
-  std::array<humanoid::StepControlJacobian, kWindowSteps> B;  // dx_{t+1} / du_t, limited inputs' columns zero
+  std::array<humanoid::StepJacobian, kWindowSteps> A;  // dx_{t+1} / dx_t
+  std::array<humanoid::StepControlJacobian, kWindowSteps>
+      B;  // dx_{t+1} / du_t, limited inputs' columns zero
   // The state cost's residuals at x_{t+1} and their Jacobian, with the estimated weights' rows
   // unweighted and the fixed weights' rows square-root weighted.
   std::array<Eigen::Matrix<double, kResiduals, humanoid::kStateSize>, kWindowSteps> J;
   std::array<Eigen::Matrix<double, kResiduals, 1>, kWindowSteps> residual;
   std::array<humanoid::JointVector, kWindowSteps> inputs;
-  std::array<std::array<bool, humanoid::kJoints>, kWindowSteps> free{};  // input not at a torque limit
+  std::array<std::array<bool, humanoid::kJoints>, kWindowSteps>
+      free{};  // input not at a torque limit
 };
 
 // log p(D | w) and its gradient for one motion's demonstrations.

@@ -53,7 +53,8 @@ std::vector<humanoid::Configuration> resample(const std::vector<humanoid::Config
                                               const std::vector<double>& at);
 
 // States from poses `step` apart, the velocities by central differences (one-sided at the ends).
-std::vector<humanoid::State> with_velocities(const std::vector<humanoid::Configuration>& poses, double step);
+std::vector<humanoid::State> with_velocities(const std::vector<humanoid::Configuration>& poses,
+                                             double step);
 
 // Roll, pitch, yaw of a unit quaternion (w, x, y, z): the inverse of attitude_quaternion
 // (motion.hpp) for pitch within (-pi/2, pi/2).
@@ -62,8 +63,8 @@ Eigen::Vector3d attitude_angles(const Eigen::Vector4d& quaternion);
 // A motion whose phases, one per kCoarseStep, target `states`: the base point's attitude,
 // height and velocity (problem.hpp's features) and the joint angles; the other settings from
 // `task`. Throws std::invalid_argument if the states need more than kMaxPhases phases.
-humanoid::Motion motion_along(const std::vector<humanoid::State>& states, const humanoid::Motion& task,
-                              const humanoid::ProblemConfig& problem);
+humanoid::Motion motion_along(const std::vector<humanoid::State>& states,
+                              const humanoid::Motion& task, const humanoid::ProblemConfig& problem);
 
 struct RetargetConfig {
   humanoid::Parameters demonstrator = demonstrator_parameters();
@@ -102,7 +103,9 @@ struct Retargeted {
 // tracking MPC's, with w_joint added, and the targets' other settings). `progress` hears of
 // each tracked demonstration. Throws std::invalid_argument without captures or if one is
 // shorter than 2 poses.
-Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion& task, const RetargetConfig& config,
-                    const std::function<void(int index, const TrackedDemonstration&)>& progress = {});
+Retargeted retarget(
+    const std::vector<Capture>& captures, const humanoid::Motion& task,
+    const RetargetConfig& config,
+    const std::function<void(int index, const TrackedDemonstration&)>& progress = {});
 
 }  // namespace hmpc::ioc

@@ -20,7 +20,7 @@ struct WeightSet {
 // Writes DIR/weights.dat, DIR/compare.gp and runs gnuplot for DIR/weights.png and, from the
 // runs in DIR/<name>/trajectory.csv, DIR/compare.png. Returns false with the reason in `error`
 // if a file cannot be written or gnuplot fails.
-bool write_comparison(const std::string& dir, const std::string& title, const std::vector<WeightSet>& sets,
-                      std::string& error);
+bool write_comparison(const std::string& dir, const std::string& title,
+                      const std::vector<WeightSet>& sets, std::string& error);
 
 }  // namespace hmpc::ioc

@@ -1,5 +1,6 @@
 // The cost weights inverse optimal control estimates (thesis Sec. 4.3.1, Eqs. 4.31-4.35):
-//   w = {w_HAA, w_HFE, w_KFE, w_AFE,  w_alpha, w_beta, w_height,  w_q1, w_q2, w_q3,  w_vx, w_vy, w_vz}
+//   w = {w_HAA, w_HFE, w_KFE, w_AFE,  w_alpha, w_beta, w_height,  w_q1, w_q2, w_q3,  w_vx, w_vy,
+//   w_vz}
 // The cost is linear in them (Eq. 4.3). The motion's other weights are not estimated and stay
 // as its file has them: w_q4 and the angular-velocity weights (the thesis fixes them at 0),
 // the foot-height weight (ours, motion.hpp) and the lower layer's.

@@ -25,7 +25,8 @@ inline double monotonic_seconds() {
 
 inline std::string describe(const CanResult& result) {
   std::string text = to_string(result.status);
-  if (result.error_number != 0) text += std::string(" (") + std::strerror(result.error_number) + ")";
+  if (result.error_number != 0)
+    text += std::string(" (") + std::strerror(result.error_number) + ")";
   return text;
 }
 

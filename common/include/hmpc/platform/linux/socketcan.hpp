@@ -51,16 +51,16 @@ struct CanFilter {
 
 enum class CanStatus {
   kOk,
-  kTimeout,             // receive: nothing arrived in time (not an error)
-  kWouldBlock,          // send on a non-blocking socket whose queue is full
-  kTransmitQueueFull,   // the interface's transmit queue is full (ENOBUFS): retry later
-  kNoCanSupport,        // the kernel has no SocketCAN (modules can, can-raw not loaded)
-  kNoSuchInterface,     // no network interface by that name (or it went away)
-  kNotCanInterface,     // the interface exists but is not a CAN interface
-  kInterfaceDown,       // the interface is administratively down
-  kInvalidArgument,     // bad name, identifier, length or filter count; nothing was done
-  kNotOpen,             // the socket is not open
-  kSystemError,         // anything else: see CanResult::error_number
+  kTimeout,            // receive: nothing arrived in time (not an error)
+  kWouldBlock,         // send on a non-blocking socket whose queue is full
+  kTransmitQueueFull,  // the interface's transmit queue is full (ENOBUFS): retry later
+  kNoCanSupport,       // the kernel has no SocketCAN (modules can, can-raw not loaded)
+  kNoSuchInterface,    // no network interface by that name (or it went away)
+  kNotCanInterface,    // the interface exists but is not a CAN interface
+  kInterfaceDown,      // the interface is administratively down
+  kInvalidArgument,    // bad name, identifier, length or filter count; nothing was done
+  kNotOpen,            // the socket is not open
+  kSystemError,        // anything else: see CanResult::error_number
 };
 
 constexpr const char* to_string(CanStatus status) {
@@ -204,8 +204,8 @@ class SocketCan {
     using Clock = std::chrono::steady_clock;
     const bool forever = timeout.count() < 0;
     const Clock::time_point deadline =
-        Clock::now() + (forever ? Clock::duration::zero()
-                                : std::chrono::duration_cast<Clock::duration>(timeout));
+        Clock::now() +
+        (forever ? Clock::duration::zero() : std::chrono::duration_cast<Clock::duration>(timeout));
     for (;;) {
       // A queued frame costs one system call: try before polling.
       can_frame raw;

@@ -1,0 +1,216 @@
+// The closed loop's simulation of one MPC (closed_loop.hpp), shared by the files that run each
+// kind: closed_loop_fine.cpp, closed_loop_coarse.cpp and closed_loop_coarse_fast.cpp each
+// instantiate it for one MPC (the heaviest templates of the library, so they compile in
+// parallel), closed_loop.cpp checks the configuration and picks the file.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "hmpc/humanoid/closed_loop.hpp"
+#include "hmpc/mpc/deadline_stop.hpp"
+#include "hmpc/mpc/receding_horizon_mpc.hpp"
+
+namespace hmpc::humanoid::detail {
+
+using Clock = std::chrono::steady_clock;
+
+template <int N, int A>
+std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N, A>, N>> make_single_layer(
+    const Motion& motion, const BasicState<A>& initial, ThreadPool* pool, ProblemConfig config,
+    double step, int iteration_cap) {
+  config = model_config(motion, config);
+  config.step = step;
+  typename RecedingHorizonMpc<HumanoidProblem<N, A>, N>::Config mpc;
+  mpc.solver = layer_solver(motion);
+  if (iteration_cap > 0) mpc.solver.max_iterations = iteration_cap;
+  mpc.steps_per_sample = static_cast<int>(std::lround(kSamplingPeriod / step));
+  return std::make_unique<RecedingHorizonMpc<HumanoidProblem<N, A>, N>>(
+      HumanoidProblem<N, A>(motion, initial, config, pool), mpc);
+}
+
+// What the loop needs from each MPC.
+template <class Mpc>
+auto& problem_of(Mpc& mpc) {
+  return mpc.problem();
+}
+template <int A>
+auto& problem_of(BasicCoarseFast<A>& mpc) {
+  return mpc.upper_problem();
+}
+template <class Mpc>
+int iterations_of(const Mpc& mpc) {
+  return mpc.last_result().iterations;
+}
+template <int A>
+int iterations_of(const BasicCoarseFast<A>& mpc) {
+  return mpc.last_upper_result().iterations;
+}
+template <class Mpc>
+int fast_iterations_of(const Mpc&) {
+  return 0;
+}
+template <int A>
+int fast_iterations_of(const BasicCoarseFast<A>& mpc) {
+  return mpc.last_fast_result().iterations;
+}
+template <class Mpc>
+bool stopped_early(const Mpc& mpc) {
+  return mpc.last_result().status == SolveStatus::kBudgetExhausted;
+}
+template <int A>
+bool stopped_early(const BasicCoarseFast<A>& mpc) {
+  return mpc.last_upper_result().status == SolveStatus::kBudgetExhausted ||
+         mpc.last_fast_result().status == SolveStatus::kBudgetExhausted;
+}
+
+template <int A>
+bool finite(const BasicState<A>& x) {
+  return x.q.allFinite() && x.v.allFinite();
+}
+
+// Height above the ground of the lowest part other than the feet: head, torso origin (mid-hip),
+// hip joints, knees (ClosedLoopConfig::fallen_clearance).
+template <int A>
+double lowest_non_foot_point(const BasicDynamics<A>& dynamics, const BasicState<A>& x) {
+  using Model = BasicModel<A>;
+  const Model& model = dynamics.model();
+  BasicKinematics<A> kin;
+  dynamics.kinematics(x.q, x.v, kin);
+  double lowest =
+      std::min(kin.position[0].z(), (kin.position[0] + kin.rotation[0] * model.vertex).z());
+  for (int leg = 0; leg < 2; ++leg) {
+    lowest = std::min({lowest, kin.position[Model::body_of(leg, kHipFlexion)].z(),
+                       kin.position[Model::body_of(leg, kKnee)].z()});
+  }
+  return lowest;
+}
+
+// A fraction of the sampling period as a clock duration.
+inline Clock::duration period(double fraction) {
+  return std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(fraction * kSamplingPeriod));
+}
+
+// Coarse-Fast's upper layer's share of the period when truncating. Our choice. The upper layer
+// does about three quarters of the work (motions IV-V untruncated, per update: upper 6
+// iterations, 60 linearised and 244 simulated steps of 6 sub-steps; lower 5.5 iterations, 61
+// and 171 steps of 2 sub-steps), and 2/3 left it 1.3 iterations on the loaded machine, where
+// motion IV fell. Measured over shares, truncated warm runs of III, V, VI, VII and VIII, 12
+// each, interleaved: 0.75 passed 35 of 60 physical checks (VIII 0 of 12: its first upper solve
+// stopped one iteration short with 8 ms of the period unused) and overran 30 ms in 10
+// samples; 0.8 passed 45, 10 samples; 0.85 passed 48, 6 samples; 0.9 (6 each) 26 of 30, 22
+// samples; leaving the lower layer only two of its iterations' time, 25 of 30 and 29 samples.
+// The price is margin on a loaded machine: with a busy process competing for the cores (all
+// motions, warm and cold), 0.85 overran in 34 of 4740 samples, 0.75 in 24 of 4816.
+constexpr double kUpperShare = 0.85;
+
+// Each layer's iteration time, carried from one update to the next (deadline_stop.hpp); a
+// single-layer MPC uses `upper`.
+struct LayerTimes {
+  IterationTime<Clock> upper, fast;
+};
+
+// One update within the sampling period, truncated (ClosedLoopConfig::truncate) by
+// deadline_stop.hpp's rule. Coarse-Fast: the upper layer until kUpperShare of the period, the
+// lower layer until its end.
+template <class Mpc, int A>
+void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate,
+            LayerTimes& times) {
+  DeadlineStop<Clock> stop(start + period(1.0), start + period(1.0), times.upper, truncate);
+  mpc.update(to_vector(x), stop);
+}
+template <int A>
+void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate,
+            LayerTimes& times) {
+  const Clock::time_point end = start + period(1.0);
+  DeadlineStop<Clock> upper(start + period(kUpperShare), end, times.upper, truncate);
+  DeadlineStop<Clock> fast(end, end, times.fast, truncate);
+  mpc.update(to_vector(x), upper, fast);
+}
+
+// Adds `weight` times the vertical contact forces of `contact` to the sample's left foot,
+// right foot and seat.
+template <int A>
+void add_vertical_forces(const BasicContactState<A>& contact, double weight,
+                         BasicClosedLoopSample<A>& sample) {
+  for (int i = 0; i < contact.count; ++i) {
+    const double fz = weight * contact.force[i].z();
+    (i < kFootPoints   ? sample.left_force
+     : i < kSolePoints ? sample.right_force
+                       : sample.seat_force) += fz;
+  }
+}
+
+template <class Mpc, int A>
+BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
+                               const BasicState<A>& initial, double duration) {
+  using State = BasicState<A>;
+  ProblemConfig plant = config.problem;
+  plant.contact = contact_for(motion, config.problem.contact);
+  const BasicStateCost<A> observer(motion, initial, plant);
+  const BasicModel<A> model(plant.parameters);
+  const BasicDynamics<A> body(model);
+  BasicStepMap<A> simulator(model, plant.parameters, plant.contact, kSimulatorStep);
+  constexpr int kFineSteps = kFineStepsPerCoarseStep;  // 10 ms input steps per sample
+  // 10 within rounding, far from a half (std::lround is not constexpr).
+  constexpr int kSimulatorSteps =
+      static_cast<int>(kFastStep / kSimulatorStep + 0.5);  // NOLINT(bugprone-incorrect-roundings)
+
+  if (config.warm_start) mpc.initialize(to_vector(initial), kOfflineIterations);
+  BasicClosedLoopRun<A> run;
+  run.initial = initial;
+  const int count = static_cast<int>(std::lround(duration / kSamplingPeriod));
+  run.samples.reserve(count);
+  State x = initial;
+  LayerTimes times;
+  for (int k = 0; k < count; ++k) {
+    const double t0 = k * kSamplingPeriod;
+    problem_of(mpc).set_start_time(t0);
+    const auto start = Clock::now();
+    update(mpc, x, start, config.truncate, times);
+    BasicClosedLoopSample<A> sample;
+    sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    sample.truncated = stopped_early(mpc);
+    sample.torque = mpc.planned_control(0);
+    for (int j = 0; j < kFineSteps; ++j) {
+      const BasicJointVector<A> u = mpc.planned_control(j);
+      for (int i = 0; i < kSimulatorSteps; ++i) {
+        const double t = t0 + (j * kSimulatorSteps + i) * kSimulatorStep;
+        sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
+                       (kSimulatorStep / kCoarseStep);
+        x = simulator.step(x, u, kSimulatorStep);
+        add_vertical_forces(simulator.contact_state(), 1.0 / (kFineSteps * kSimulatorSteps),
+                            sample);
+      }
+    }
+    sample.time = t0 + kSamplingPeriod;
+    sample.state = x;
+    sample.iterations = iterations_of(mpc);
+    sample.fast_iterations = fast_iterations_of(mpc);
+    sample.plan_usable = mpc.last_plan_usable();
+    if (finite(x)) sample.base = observer.features(x);
+    run.samples.push_back(sample);
+    if (!finite(x) || lowest_non_foot_point(body, x) < config.fallen_clearance) {
+      run.fell_at = sample.time;
+      break;
+    }
+  }
+  return run;
+}
+
+// The run of each MPC kind from `initial` (closed_loop_<kind>.cpp); `pool` may be null.
+template <int A>
+BasicClosedLoopRun<A> run_fine(const Motion& motion, const ClosedLoopConfig& config,
+                               const BasicState<A>& initial, ThreadPool* pool, double duration);
+template <int A>
+BasicClosedLoopRun<A> run_coarse(const Motion& motion, const ClosedLoopConfig& config,
+                                 const BasicState<A>& initial, ThreadPool* pool, double duration);
+template <int A>
+BasicClosedLoopRun<A> run_coarse_fast(const Motion& motion, const ClosedLoopConfig& config,
+                                      const BasicState<A>& initial, ThreadPool* pool,
+                                      double duration);
+
+}  // namespace hmpc::humanoid::detail
