@@ -87,6 +87,9 @@ struct BoardConfig {
   // mpc_budget_s counts as an overrun but, unlike a real deadline miss, leads to no fallback:
   // the HIL compares strategies as the thesis ran them. nullptr: no emulation.
   const ComputeCostModel* emulated_target = nullptr;
+  // Test hook for the HIL's fault tests: from this tick on, every MPC step ends in a numerical
+  // failure, as a solve meeting non-finite numbers would, and its plan is not used. 0: never.
+  std::uint32_t solver_failure_from_tick = 0;
 };
 
 struct BoardCounters {
@@ -211,18 +214,20 @@ class ForearmBoard {
   void run_mpc() {
     mpc_due_ = false;
     if (mode_ != proto::BoardMode::kRun) return;
-    if (needs_initialization_) {
-      // Algorithm 1, line 1: the initial inputs optimised before the first online step. A
-      // one-off cost outside the deadline; the previous outputs stay applied meanwhile.
-      with_strategy([&](auto& mpc) {
-        forearm::set_time(mpc, host_time());
-        mpc.initialize(x_, forearm::kIterationCap);
-      });
-      needs_initialization_ = false;
-    }
     const double start = clock_ ? clock_() : 0.0;
     const double deadline = start + config_.mpc_budget_s;
     const auto stop = [this, deadline] { return clock_ && clock_() > deadline; };
+    if (needs_initialization_) {
+      // Algorithm 1, line 1: the initial inputs, optimised before the first online step. With
+      // a clock, within this step's deadline, so that entering run never stalls the board's
+      // ticks (the online solves go on improving them); in lock-step HIL whole and uncharged,
+      // as the thesis's offline optimisation. The previous outputs stay applied meanwhile.
+      with_strategy([&](auto& mpc) {
+        forearm::set_time(mpc, host_time());
+        mpc.initialize(x_, forearm::kIterationCap, stop);
+      });
+      needs_initialization_ = false;
+    }
     SolveStatus status = SolveStatus::kConverged;
     Control plan;
     with_strategy([&](auto& mpc) {
@@ -233,6 +238,11 @@ class ForearmBoard {
       last_iterations_ = mpc.last_iterations();
       record_layers(mpc, status);
     });
+    if (config_.solver_failure_from_tick != 0 && ticks_ >= config_.solver_failure_from_tick) {
+      usable_ = false;
+      status = SolveStatus::kNumericalFailure;
+      plan = plan_;
+    }
     ++counters_.mpc_steps;
     const ComputeCostModel* target = config_.emulated_target;
     double elapsed = 0.0;

@@ -62,6 +62,7 @@ struct Options {
   bool dds_loopback = false;
   hmpc::hil::FaultConfig faults{};
   double stop_heartbeat_at_s = -1;
+  double die_at_s = -1;  // test hook: SIGKILL to itself at this host time; < 0: never
   std::string log_path;
 };
 
@@ -72,7 +73,7 @@ void print_usage(std::FILE* out) {
       "         [--run STRATEGY [--amplitude-deg A] [--frequency HZ] [--offset-deg D]\n"
       "          [--run-at S] [--run-for S]] [--dds-domain ID [--dds-loopback]]\n"
       "         [--drop-percent P] [--corrupt-percent P] [--silence-at S] [--silence-ms MS]\n"
-      "         [--stop-heartbeat-at S] [--seed N] [--log FILE]\n"
+      "         [--stop-heartbeat-at S] [--die-at S] [--seed N] [--log FILE]\n"
       "  --interface IFACE     SocketCAN interface (default vcan0)\n"
       "  --node N              board node id 0..15 (default 0)\n"
       "  --lockstep            one host tick per Sync frame of the HIL plant (default: 1 kHz "
@@ -91,6 +92,7 @@ void print_usage(std::FILE* out) {
       "  --drop-percent P, --corrupt-percent P, --silence-at S, --silence-ms MS, --seed N\n"
       "                        faults on the host's frames to the board\n"
       "  --stop-heartbeat-at S the host stops sending heartbeats at S (a dead host)\n"
+      "  --die-at S            test hook: the host kills itself with SIGKILL at S (a crash)\n"
       "  --log FILE            CSV of every SolveTelemetry report (4 ms)\n"
       "Exit status: 0 at the end of --duration or on SIGINT/SIGTERM; 1 when the bus, DDS or\n"
       "the log fails; 2 for bad arguments.\n",
@@ -133,6 +135,7 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.number("--silence-at", 0, 1e6, "a time in [0, 1e6] s", silence_at);
   p.number("--silence-ms", 1, 1e6, "a duration in [1, 1e6] ms", silence_ms);
   p.number("--stop-heartbeat-at", 0, 1e6, "a time in [0, 1e6] s", o.stop_heartbeat_at_s);
+  p.number("--die-at", 0, 1e6, "a time in [0, 1e6] s", o.die_at_s);
   p.integer("--seed", 0, 2147483647L, o.faults.seed);
   p.text("--log", [&](const std::string& v) -> std::string {
     if (v.empty()) return "--log needs a file name";
@@ -199,6 +202,7 @@ class Host {
   // One host tick at host time t: the script or DDS commands, then the frames due.
   bool tick(double t, std::string& error) {
     now_s_ = t;
+    if (o_.die_at_s >= 0 && t >= o_.die_at_s) ::raise(SIGKILL);
     if (o_.scripted) script(t);
     if (dds_) {
       dds_->poll_commands([&](const hmpc::dds::ForearmCommandSample& c) { on_command(c, t); });
@@ -221,6 +225,8 @@ class Host {
         if constexpr (std::is_same_v<std::decay_t<decltype(message)>, proto::ModeCommand>) {
           if (faults_.counters().corrupted == corrupted_before) on_intact_heartbeat(message, t);
         }
+      } else if (sent.status == CanStatus::kInterfaceDown) {
+        ++interface_down_;  // the bus went away: keep ticking, it may come back
       } else if (sent.status != CanStatus::kWouldBlock &&
                  sent.status != CanStatus::kTransmitQueueFull) {
         error = "sending failed: " + describe(sent);
@@ -251,6 +257,8 @@ class Host {
     return false;
   }
 
+  void note_interface_down() { ++interface_down_; }
+
   void print_summary(double wall_s) const {
     const auto& r = master_.report();
     const auto& f = faults_.counters();
@@ -267,7 +275,7 @@ class Host {
         "telemetry_frames=%llu solves=%llu solve_time_max_us=%.0f solve_time_median_us=%.0f "
         "host_rejected_frames=%u frames_dropped=%llu frames_corrupted=%llu frames_silenced=%llu "
         "dds_commands=%llu dds_rejected_commands=%llu heartbeat_max_gap_ms=%.0f "
-        "last_heartbeat_s=%.3f\n",
+        "last_heartbeat_s=%.3f interface_down=%llu\n",
         kProgram, now_s_, wall_s, run_start_s_, run_stop_s_,
         static_cast<unsigned long long>(frames_sent_),
         static_cast<unsigned long long>(frames_received_),
@@ -284,7 +292,8 @@ class Host {
         static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
         static_cast<unsigned long long>(f.silenced), static_cast<unsigned long long>(dds_commands_),
         static_cast<unsigned long long>(dds_ ? dds_->rejected_commands() : 0),
-        heartbeat_max_gap_s_ * 1e3, last_heartbeat_s_);
+        heartbeat_max_gap_s_ * 1e3, last_heartbeat_s_,
+        static_cast<unsigned long long>(interface_down_));
   }
 
  private:
@@ -397,6 +406,7 @@ class Host {
   double run_start_s_ = -1, run_stop_s_ = -1, run_end_s_ = -1;
   double last_active_heartbeat_s_ = -1, heartbeat_max_gap_s_ = 0, last_heartbeat_s_ = -1;
   std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
+  std::uint64_t interface_down_ = 0;  // sends and receives that found the interface down
   std::uint64_t dds_commands_ = 0;
   SolveTimeHistogram solve_times_;
 };
@@ -442,7 +452,9 @@ End run(const Options& o, SocketCan& can, Host& host, int signal_fd, std::string
           ++ticks;
         }
       }
-      if (r.status != CanStatus::kTimeout && !r.ok()) {
+      if (r.status == CanStatus::kInterfaceDown) {
+        host.note_interface_down();
+      } else if (r.status != CanStatus::kTimeout && !r.ok()) {
         error = "receiving failed: " + describe(r);
         end = End::kFailure;
         break;

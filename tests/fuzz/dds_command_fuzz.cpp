@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
         for (double f : fields) {
           std::uint8_t raw[8];
           std::memcpy(raw, &f, 8);
-          b.insert(b.end(), raw, raw + 8);
+          for (const std::uint8_t byte : raw) b.push_back(byte);
         }
         seeds.push_back(b);
       }

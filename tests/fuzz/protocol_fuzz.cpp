@@ -9,6 +9,7 @@
 // Built as a libFuzzer binary with clang (HMPC_BUILD_FUZZERS), and with HMPC_FUZZ_REPLAY as a
 // plain program that runs the same entry point on a fixed-seed corpus of random inputs and
 // bit-flipped valid frames, so every CI run checks the properties (tests/fuzz/CMakeLists.txt).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -172,9 +173,11 @@ Frame random_valid_frame(std::mt19937_64& rng) {
 }
 
 std::vector<std::uint8_t> bytes_of(const Frame& frame) {
-  std::vector<std::uint8_t> bytes = {static_cast<std::uint8_t>(frame.id),
-                                     static_cast<std::uint8_t>(frame.id >> 8), frame.dlc};
-  bytes.insert(bytes.end(), frame.data.begin(), frame.data.end());
+  std::vector<std::uint8_t> bytes(3 + frame.data.size());
+  bytes[0] = static_cast<std::uint8_t>(frame.id);
+  bytes[1] = static_cast<std::uint8_t>(frame.id >> 8);
+  bytes[2] = frame.dlc;
+  std::copy(frame.data.begin(), frame.data.end(), bytes.begin() + 3);
   return bytes;
 }
 

@@ -1,16 +1,25 @@
 // Faults in the forearm HIL over CAN (board, host and Simbody plant as separate programs in
 // lock-step on vcan0; ctest runs this binary through hil/vcan/run-with-vcan.sh): dropped,
-// corrupted and delayed frames, a dead host, windows of silence. The board ends in its safe
-// state or rides through as specified, the joint never leaves its mechanical range, and every
-// log is complete. Where a watchdog acts, its latency is read off the board's tick log and the
-// plant's log in lock-step ticks (1 ms, a quarter of the 4 ms MPC period), which are the
-// board's own clock whatever the speed of the machine.
+// corrupted and delayed frames, lost actuator commands, a dead or killed host, windows of
+// silence, a failing solver; in real time a killed plant and the bus going down and up. The
+// board ends in its safe state or rides through as specified, the joint never leaves its
+// mechanical range, and every log is complete, also of a process that was killed. Where a watchdog
+// acts, its latency is read off the board's tick log and the plant's log in lock-step ticks (1 ms,
+// a quarter of the 4 ms MPC period), which are the board's own clock whatever the speed of the
+// machine.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "child_process.hpp"
@@ -176,6 +185,104 @@ TEST(ForearmHilFaults, DelayedSensorsStillTrack) {
   EXPECT_LT(r.rms_error, 10 * M_PI / 180);
 }
 
+// The host process killed by SIGKILL mid-run (its own test hook, at host time 0.8 s: no
+// cleanup, no last words). The board's heartbeat watchdog puts it safe, as for a host that
+// stops sending; the plant stops waiting for the host and runs on; every row the host logged
+// before it died is in its file (logs are line-buffered), up to its last 4 ms report.
+TEST(ForearmHilFaults, KilledHostTripsTheWatchdogAndItsLogSurvivesIt) {
+  HilRunSpec s;
+  s = hmpc::hil::test::spec(Strategy::kTwoStage, "fault_killed_host");
+  s.run_for_s = 1.2;
+  s.plant_args = {"--host-timeout", "0.3"};
+  s.host_args = {"--die-at", std::to_string(kFaultAtS)};
+  s.host_dies = true;
+  const HilRunResult r = hmpc::hil::run_hil(s, hmpc::hil::HilPrograms::built());
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.board.at("mode"), "fault");
+  EXPECT_EQ(unsigned(r.number(r.board, "faults")), proto::fault::kHeartbeatTimeout);
+  EXPECT_EQ(r.number(r.plant, "host_given_up"), 1);
+  const BoardTickRow* fault = first_fault(r);
+  ASSERT_NE(fault, nullptr);
+  const double timeout = r.number(r.board, "heartbeat_timeout_ticks");
+  EXPECT_EQ(double(fault->heartbeat_age), timeout + 1);
+  // The last heartbeat went at the latest at host tick 790 (every 10 ticks), and reached the
+  // board before its tick 792.
+  EXPECT_GT(double(fault->tick), kFaultAtTick - 10 + timeout);
+  EXPECT_LE(double(fault->tick), kFaultAtTick + timeout + 2);
+  bool plant_safe = true;
+  for (std::size_t k = fault->tick - 1; k < r.plant_log.size(); ++k) {
+    plant_safe = plant_safe && r.plant_log[k].v_p == 0 && r.plant_log[k].v_m == 0;
+  }
+  EXPECT_TRUE(plant_safe) << "not safe at the plant from the step of tick " << fault->tick;
+  std::printf("killed host: safe outputs from board tick %u, %u ticks after the last heartbeat\n",
+              fault->tick, fault->heartbeat_age);
+  // The host's log: its header, then a row per SolveTelemetry report, every one whole, the
+  // last within one report period (4 ms) of its death.
+  std::ifstream log(s.directory + "/host.csv");
+  std::string line, last;
+  std::getline(log, line);
+  int rows = 0;
+  while (std::getline(log, line)) {
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 13) << "a torn row: " << line;
+    last = line;
+    ++rows;
+  }
+  ASSERT_GT(rows, 0);
+  const double last_time = std::stod(last.substr(0, last.find(',')));
+  EXPECT_GE(last_time, kFaultAtS - 0.004 - 1e-9);
+  EXPECT_LT(last_time, kFaultAtS);
+}
+
+// 10 % of the board's ActuatorCommand frames lost on their way to the actuators, which keep
+// the last command they received: one 1 ms command missing changes nothing the board could
+// notice, and it keeps running and tracking.
+TEST(ForearmHilFaults, LostActuatorCommandsAreRiddenThrough) {
+  HilRunSpec s;
+  const HilRunResult r = run_fault("command_loss", {"--drop-commands-percent", "10"}, {}, s);
+  ASSERT_NO_FATAL_FAILURE(expect_intact(r, s));
+  EXPECT_EQ(r.host.at("board_mode"), "hold");  // the run ended normally
+  EXPECT_EQ(r.number(r.host, "board_faults"), 0);
+  const double steps = r.number(r.plant, "steps"), dropped = r.number(r.plant, "commands_dropped");
+  EXPECT_GT(dropped, 0.05 * steps);
+  EXPECT_LT(dropped, 0.15 * steps);
+  EXPECT_EQ(r.number(r.plant, "actuator_commands") + dropped, steps);  // one answer per Sync
+  EXPECT_LT(r.rms_error, 10 * M_PI / 180);
+}
+
+// The solver failing numerically in every MPC step from 0.8 s on (the board's test hook): each
+// failed step keeps the previous plan, and the third in a row sends the board back to hold
+// with the solver-fallback bit, its joint held. MPC steps come every 4 ticks, so hold takes
+// over within 3 MPC periods of the first failed step, which is at most one period after 0.8 s.
+TEST(ForearmHilFaults, ASolverThatFailsFallsBackToHoldWithinThreeMpcPeriods) {
+  HilRunSpec hooked = hmpc::hil::test::spec(Strategy::kTwoStage, "fault_solver_failure");
+  hooked.run_for_s = 1.2;
+  hooked.board_args = {"--fail-solver-at", std::to_string(kFaultAtS)};
+  const HilRunResult f = hmpc::hil::run_hil(hooked, hmpc::hil::HilPrograms::built());
+  ASSERT_NO_FATAL_FAILURE(expect_intact(f, hooked));
+  EXPECT_EQ(f.number(f.board, "fallbacks"), 1);
+  EXPECT_EQ(f.number(f.board, "solver_failures"), 3);
+  EXPECT_EQ(f.board.at("mode"), "hold");
+  const BoardTickRow* fallback = nullptr;
+  for (const BoardTickRow& row : f.board_log) {
+    if (row.tick > kFaultAtTick && row.mode == "hold" &&
+        (row.faults & proto::fault::kSolverFallback)) {
+      fallback = &row;
+      break;
+    }
+  }
+  ASSERT_NE(fallback, nullptr) << "never fell back to hold";
+  constexpr std::uint32_t kMpcPeriod = 4;
+  std::printf("solver failure from tick %u: hold from tick %u (%.1f MPC periods)\n", kFaultAtTick,
+              fallback->tick, double(fallback->tick - kFaultAtTick) / kMpcPeriod);
+  EXPECT_LE(fallback->tick, kFaultAtTick + 4 * kMpcPeriod);
+  EXPECT_GE(fallback->tick, kFaultAtTick + 2 * kMpcPeriod);
+  for (const BoardTickRow& row : f.board_log) {
+    if (row.tick >= fallback->tick) {
+      EXPECT_EQ(row.mode, "hold") << "tick " << row.tick;
+    }
+  }
+}
+
 // 20 % of the host's frames with a bit flipped: the board rejects every one (CRC-8) and acts
 // on none, and the run's outcome is the one the intact heartbeats dictate: the board faults,
 // for the heartbeat alone, exactly when two heartbeats in a row were lost, i.e. when the
@@ -201,6 +308,134 @@ TEST(ForearmHilFaults, CorruptedHostFramesAreRejectedNeverActedOn) {
     EXPECT_EQ(r.number(r.host, "board_faults"), 0);
     EXPECT_EQ(first_fault(r), nullptr);
   }
+}
+
+// ---- real time: the board on its own 1 kHz timer ----------------------------------------
+// Lock-step cannot show these two faults: its board ticks on the plant's Sync frames, so a dead
+// plant or a dead bus stops the board's clock with them. On a wall clock the latencies are the
+// machine's, not the board's (in an emulated guest the plant runs slower than real time and
+// the board's sensor watchdog may trip before the fault): they are printed, the reactions
+// asserted.
+
+struct RealTimeRun {
+  hmpc::hil::Child board, host, plant;
+  std::string dir;
+  std::string error;
+
+  bool start(const std::string& name, const std::string& node,
+             std::vector<std::string> plant_args) {
+    dir = work_dir() + "/" + name;
+    std::filesystem::create_directories(dir);
+    const hmpc::hil::HilPrograms programs = hmpc::hil::HilPrograms::built();
+    if (!board.start(programs.board, {"--node", node, "--log", dir + "/board.csv"},
+                     dir + "/board.out", error) ||
+        !host.start(programs.host,
+                    {"--node", node, "--run", "two_stage", "--run-at", "0.3", "--run-for", "60",
+                     "--log", dir + "/host.csv"},
+                    dir + "/host.out", error)) {
+      return false;
+    }
+    if (!board.await_output(": ready", 60) || !host.await_output(": ready", 60)) {
+      error = "board or host did not start: " + board.errors() + host.errors();
+      return false;
+    }
+    plant_args.insert(plant_args.end(), {"--node", node, "--log", dir + "/plant.csv"});
+    return plant.start(programs.plant, plant_args, dir + "/plant.out", error);
+  }
+};
+
+// The first row of the board's tick log (written at its exit) in fault; mode empty if none.
+BoardTickRow first_fault_in_log(const std::string& dir) {
+  std::vector<BoardTickRow> rows;
+  std::string error;
+  EXPECT_TRUE(hmpc::hil::read_board_log(dir + "/board.csv", rows, error)) << error;
+  for (const BoardTickRow& r : rows) {
+    if (r.mode == "fault") return r;
+  }
+  return {};
+}
+
+// The plant killed by SIGKILL at simulated time 0.5 s, in run (its test hook): the board's sensor
+// watchdog puts it safe and it stays alive; every step the plant logged is in its file.
+TEST(ForearmHilFaultsRealTime, KilledPlantTripsTheSensorWatchdogAndItsLogSurvivesIt) {
+  RealTimeRun run;
+  ASSERT_TRUE(run.start("real_time_killed_plant", "7", {"--duration", "5", "--die-at", "0.5"}))
+      << run.error;
+  EXPECT_EQ(run.plant.wait(120), 128 + SIGKILL) << run.plant.errors();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(run.host.stop(30), 0) << run.host.errors();
+  EXPECT_EQ(run.board.stop(30), 0) << run.board.errors();
+  const auto board = hmpc::hil::parse_summary(run.board.output());
+  ASSERT_FALSE(board.empty()) << run.board.output();
+  EXPECT_EQ(board.at("mode"), "fault");
+  EXPECT_TRUE(std::stoul(board.at("faults"), nullptr, 16) & proto::fault::kSensorTimeout);
+  const BoardTickRow fault = first_fault_in_log(run.dir);
+  ASSERT_EQ(fault.mode, "fault");
+  EXPECT_EQ(fault.v_p, 0);
+  EXPECT_EQ(fault.v_m, 0);
+  std::printf(
+      "killed plant (real time): the board safe from tick %u, %u ticks after its last "
+      "reading (timeout %s)\n",
+      fault.tick, fault.sensor_age, board.at("sensor_timeout_ticks").c_str());
+  // The plant's log: every row whole, the last the step that ended at 0.5 s, when it died.
+  std::ifstream log(run.dir + "/plant.csv");
+  std::string line, last;
+  std::getline(log, line);
+  while (std::getline(log, line)) {
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 7) << "a torn row: " << line;
+    last = line;
+  }
+  ASSERT_FALSE(last.empty());
+  EXPECT_NEAR(std::stod(last.substr(0, last.find(','))), 0.5, 1e-9);
+}
+
+// vcan0 taken down for 100 ms and up again (`ip link set`), as a cable pulled and plugged
+// back: board, host and plant live through it (sends and receives that find the interface
+// down are counted, not fatal), the board's watchdogs put it in its safe state, and the host
+// hears its reports again once the bus is back.
+TEST(ForearmHilFaultsRealTime, BusDownAndUpIsSurvivedAndTheBoardGoesSafe) {
+  if (::geteuid() != 0) GTEST_SKIP() << "taking vcan0 down needs root (the CI's user)";
+  RealTimeRun run;
+  ASSERT_TRUE(run.start("real_time_bus_down", "8", {"--duration", "2"})) << run.error;
+  const auto host_started = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  ASSERT_EQ(std::system("ip link set vcan0 down"), 0);
+  const double down_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - host_started).count();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ASSERT_EQ(std::system("ip link set vcan0 up"), 0);
+  const double up_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - host_started).count();
+  EXPECT_EQ(run.plant.wait(120), 0) << run.plant.errors();
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  EXPECT_EQ(run.host.stop(30), 0) << run.host.errors();
+  EXPECT_EQ(run.board.stop(30), 0) << run.board.errors();
+  const auto board = hmpc::hil::parse_summary(run.board.output());
+  const auto host = hmpc::hil::parse_summary(run.host.output());
+  const auto plant = hmpc::hil::parse_summary(run.plant.output());
+  ASSERT_FALSE(board.empty() || host.empty() || plant.empty());
+  EXPECT_GT(std::stod(board.at("interface_down")) + std::stod(board.at("transmit_failures")), 0);
+  EXPECT_GT(std::stod(host.at("interface_down")), 0);
+  EXPECT_GT(std::stod(plant.at("interface_down")), 0);
+  const unsigned faults = unsigned(std::stoul(board.at("faults"), nullptr, 16));
+  EXPECT_EQ(board.at("mode"), "fault");
+  EXPECT_NE(faults & (proto::fault::kSensorTimeout | proto::fault::kHeartbeatTimeout), 0u);
+  EXPECT_EQ(faults & ~unsigned(proto::fault::kSensorTimeout | proto::fault::kHeartbeatTimeout), 0u);
+  // The host's log rows carry its clock (1 kHz ticks since it started, a little before this
+  // test's clock here, hence the 0.5 s): a row after the bus came back is a report it heard
+  // again.
+  std::ifstream log(run.dir + "/host.csv");
+  std::string line, last;
+  std::getline(log, line);
+  while (std::getline(log, line)) last = line;
+  ASSERT_FALSE(last.empty());
+  const double last_report_s = std::stod(last.substr(0, last.find(',')));
+  const BoardTickRow fault = first_fault_in_log(run.dir);
+  std::printf(
+      "bus down at %.3f s, up at %.3f s (host clock); board safe from its tick %u "
+      "(heartbeat age %u, sensor age %u); the host's last report at %.3f s\n",
+      down_s, up_s, fault.tick, fault.heartbeat_age, fault.sensor_age, last_report_s);
+  EXPECT_GT(last_report_s, up_s + 0.5);
 }
 
 // Without --lockstep a 1 kHz timer paces the plant: one Sensor frame per step, no Sync, and the

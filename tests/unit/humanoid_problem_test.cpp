@@ -1,15 +1,13 @@
-// The humanoid's optimal control problem (problem.hpp) and the thread pool behind its parallel
-// linearisation (thread_pool.hpp): the stance helper, each cost term of Sec. 4.3.1 against its
-// definition, the Gauss-Newton derivatives, parallel == serial bit for bit, no allocation.
+// The humanoid's optimal control problem (problem.hpp) and its parallel linearisation on the
+// thread pool (thread_pool.hpp; the pool itself: thread_pool_test): the stance helper, each
+// cost term of Sec. 4.3.1 against its definition, the Gauss-Newton derivatives, parallel ==
+// serial bit for bit, no allocation.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <memory>
-#include <thread>
 #include <vector>
 
 #include "hmpc/humanoid/problem.hpp"
@@ -295,35 +293,6 @@ TEST(HumanoidProblem, ParallelSolveDoesNotAllocate) {
   heap_monitor::disarm();
   EXPECT_EQ(heap_monitor::allocations() - before, 0u);
   EXPECT_GE(result.iterations, 1);
-}
-
-TEST(HumanoidThreadPool, RunsEveryIndexExactlyOnce) {
-  for (int threads : {1, 2, 4}) {
-    ThreadPool pool(threads);
-    EXPECT_EQ(pool.threads(), threads);
-    for (int count : {0, 1, 3, 100}) {
-      std::vector<std::atomic<int>> runs(count);
-      for (int repeat = 0; repeat < 3; ++repeat) pool.for_each(count, [&](int i) { ++runs[i]; });
-      for (int i = 0; i < count; ++i)
-        EXPECT_EQ(runs[i].load(), 3) << threads << " threads, index " << i << " of " << count;
-    }
-  }
-}
-
-TEST(HumanoidThreadPool, RunsTasksConcurrently) {
-  // Two tasks that each wait (up to 10 s) for the other to start can only both see the other
-  // if they run at the same time.
-  ThreadPool pool(2);
-  std::atomic<int> started{0};
-  std::atomic<int> met{0};
-  pool.for_each(2, [&](int) {
-    ++started;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (started.load() < 2 && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::yield();
-    if (started.load() == 2) ++met;
-  });
-  EXPECT_EQ(met.load(), 2);
 }
 
 // Eq. 2.53 on the robot with an arm: the last three residuals are sqrt(w_reach) times the

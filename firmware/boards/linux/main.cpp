@@ -90,8 +90,9 @@ struct LoopStats {
   std::uint64_t ticks = 0;
   std::uint64_t timer_overruns = 0;  // expirations of the 1 kHz timer found while still busy
   std::uint64_t transmit_failures = 0;
-  double max_busy_s = 0;            // longest wake-up: ticks, frames and the MPC step
-  double max_wakeup_latency_s = 0;  // latest wake-up after its timer expiration
+  std::uint64_t interface_down = 0;  // receives that found the interface down
+  double max_busy_s = 0;             // longest wake-up: ticks, frames and the MPC step
+  double max_wakeup_latency_s = 0;   // latest wake-up after its timer expiration
 };
 
 // The board with its bus: delivers received frames, ticks, sends what the board yields.
@@ -169,13 +170,19 @@ class BoardLoop {
 };
 
 // Delivers up to kMaxFramesPerDrain queued frames, telling on_frame whether each was an
-// accepted Sync. False on a receive error (in `error`).
+// accepted Sync. An interface that is down (a bus that went away) delivers nothing and is
+// counted: the board keeps its clock and its watchdogs, which put it in its safe state, and
+// hears the bus again when it comes back. False on any other receive error (in `failure`).
 template <class OnFrame>
 bool drain(SocketCan& can, BoardLoop& loop, OnFrame&& on_frame, LoopFailure& failure) {
   for (int i = 0; i < kMaxFramesPerDrain; ++i) {
     CanFrame frame;
     const CanResult result = can.receive(frame, std::chrono::microseconds(0));
     if (result.status == CanStatus::kTimeout) return true;
+    if (result.status == CanStatus::kInterfaceDown) {
+      ++loop.stats().interface_down;
+      return true;
+    }
     if (!result.ok()) {
       failure.receive = result;
       return false;
@@ -288,6 +295,7 @@ int main(int argc, char** argv) {
   config.node = options.node;
   if (options.emulate_cortex_m7) config.emulated_target = &hmpc::forearm::kCortexM7ComputeModel;
   if (options.w_v > 0) config.weights.w_v = options.w_v;
+  config.solver_failure_from_tick = std::uint32_t(std::lround(options.fail_solver_at_s * 1e3));
   // Lock-step has no deadline: the simulator, not this machine, decides how long a solve takes.
   static Board board(config, options.lockstep ? nullptr : &monotonic_seconds);
   BoardLoop loop(board, config, can, log);
@@ -347,7 +355,8 @@ int main(int argc, char** argv) {
       "%s: summary ticks=%llu seconds=%.3f ticks_per_s=%.1f mode=%s faults=0x%02x "
       "mpc_steps=%u solver_failures=%u mpc_overruns=%u fallbacks=%u watchdog_trips=%u "
       "sensor_timeouts=%u refused_commands=%u rejected_frames=%u dropped_frames=%u "
-      "transmit_failures=%llu timer_overruns=%llu max_busy_ms=%.3f max_wakeup_latency_ms=%.3f "
+      "transmit_failures=%llu interface_down=%llu timer_overruns=%llu max_busy_ms=%.3f "
+      "max_wakeup_latency_ms=%.3f "
       "heap_allocations_in_loop=%llu safe_outputs_sent=%d heartbeat_timeout_ticks=%d "
       "sensor_timeout_ticks=%d\n",
       kProgram, static_cast<unsigned long long>(stats.ticks), elapsed_s,
@@ -356,6 +365,7 @@ int main(int argc, char** argv) {
       c.mpc_steps, c.solver_failures, c.overruns, c.fallbacks, c.watchdog_trips, c.sensor_timeouts,
       c.refused_commands, board.rejects().total(), board.dropped_frames(),
       static_cast<unsigned long long>(stats.transmit_failures),
+      static_cast<unsigned long long>(stats.interface_down),
       static_cast<unsigned long long>(stats.timer_overruns), stats.max_busy_s * 1e3,
       stats.max_wakeup_latency_s * 1e3,
       static_cast<unsigned long long>(heap_monitor::allocations()), safe_sent ? 1 : 0,

@@ -19,6 +19,7 @@ struct Options {
   double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
   double duration_s = 0;           // 0: until SIGINT or SIGTERM
   std::string log_path;            // empty: no log
+  double fail_solver_at_s = 0;     // test hook (BoardConfig::solver_failure_from_tick); 0: never
 };
 
 // Long enough for any run a test or an experiment needs, short enough that the tick count
@@ -32,7 +33,7 @@ inline void print_usage(std::FILE* out) {
       out,
       "usage: hmpc-forearm-board [--interface IFACE] [--node N] [--lockstep]\n"
       "                          [--emulate-target cortex-m7] [--w-v W] [--duration SECONDS]\n"
-      "                          [--log FILE]\n"
+      "                          [--log FILE] [--fail-solver-at SECONDS]\n"
       "  --interface IFACE   SocketCAN interface, e.g. can0 or vcan0 (default: vcan0)\n"
       "  --node N            board node id on the bus, 0..15 (default: 0)\n"
       "  --lockstep          HIL lock-step: each valid Sync frame from the plant is one 1 kHz\n"
@@ -46,6 +47,9 @@ inline void print_usage(std::FILE* out) {
       "  --duration SECONDS  stop after this long (default: run until SIGINT or SIGTERM)\n"
       "  --log FILE          write mode and outputs of every tick as CSV at exit (the last\n"
       "                      %d minutes are kept in memory meanwhile)\n"
+      "  --fail-solver-at SECONDS\n"
+      "                      test hook for fault tests: every MPC step from this board time on\n"
+      "                      ends in a numerical failure\n"
       "On exit the board commands safe outputs (valve vented, motor off). Exit status: 0 on\n"
       "SIGINT, SIGTERM or the end of --duration; 1 when the interface or the log cannot be\n"
       "used; 2 for bad arguments.\n",
@@ -71,6 +75,8 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
     return {};
   });
   parser.number("--w-v", 1e-6, 1, "a weight in [1e-6, 1]", options.w_v);
+  parser.number("--fail-solver-at", 1e-3, kMaxDurationS, "a board time in [0.001, 1e6] s",
+                options.fail_solver_at_s);
   parser.number("--duration", 1e-3, kMaxDurationS, "a number of seconds in [0.001, 1e6]",
                 options.duration_s);
   parser.text("--log", [&](const std::string& v) -> std::string {

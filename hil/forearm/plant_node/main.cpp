@@ -62,6 +62,8 @@ struct Summary {
   std::uint64_t host_heartbeats = 0;
   std::uint64_t deadline_misses = 0;  // real time: steps taken after their tick had passed
   std::uint64_t host_waits_timed_out = 0;
+  std::uint64_t commands_dropped = 0;  // --drop-commands-percent
+  std::uint64_t interface_down = 0;    // Sensor frames not sent: the interface was down
   bool host_given_up = false;
   double theta_min = 1e9, theta_max = -1e9;
   double wall_s = 0;
@@ -74,6 +76,7 @@ class PlantNode {
       : options_(options), plant_(plant), can_(can), log_(log), sender_(options.node),
         from_board_(options.node), faults_(options.sensor_faults),
         noise_random_(options.sensor_faults.seed ^ 0x5eed5eedULL),
+        command_loss_random_(options.sensor_faults.seed ^ 0xc0de105eULL),
         delayed_(std::size_t(options.sensor_delay_ms) + 1) {
     for (auto& reading : delayed_) reading = plant_.state();
   }
@@ -81,6 +84,7 @@ class PlantNode {
   // Sends this step's Sensor frame (and Sync, in lock-step). False when the bus fails.
   bool send_sensor(std::string& error) {
     const double t = plant_.time();
+    if (options_.die_at_s >= 0 && t >= options_.die_at_s) ::raise(SIGKILL);
     delayed_[head_] = measured(plant_.state());
     head_ = (head_ + 1) % delayed_.size();
     const ForearmPlantState& reading = delayed_[head_];  // the oldest: sensor_delay_ms ago
@@ -120,6 +124,11 @@ class PlantNode {
       return Received::kHeartbeat;
     }
     if (type != proto::FrameType::kActuatorCommand) return Received::kOther;
+    if (options_.drop_commands_fraction > 0 &&
+        uniform_(command_loss_random_) < options_.drop_commands_fraction) {
+      ++summary_.commands_dropped;  // lost on the way: the actuators keep the last command
+      return Received::kActuatorCommand;
+    }
     proto::ActuatorCommand command;
     if (from_board_.decode(frame, command) == proto::DecodeResult::kOk) {
       command_ = command;
@@ -162,6 +171,10 @@ class PlantNode {
   bool send(const proto::Frame& frame, std::string& error) {
     const CanResult sent = can_.send(hmpc::platform::to_can_frame(frame));
     if (sent.ok()) return true;
+    if (sent.status == CanStatus::kInterfaceDown) {  // the bus went away: the board will notice
+      ++summary_.interface_down;
+      return true;
+    }
     error = "sending a Sensor frame failed: " + describe(sent);
     return false;
   }
@@ -175,6 +188,8 @@ class PlantNode {
   FaultInjector faults_;
   std::mt19937_64 noise_random_;
   std::normal_distribution<double> gaussian_{0.0, 1.0};
+  std::mt19937_64 command_loss_random_;
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   std::vector<ForearmPlantState> delayed_;  // ring of readings, sensor_delay_ms + 1 long
   std::size_t head_ = 0;
   proto::ActuatorCommand command_{};  // until the board speaks: valve closed at 0 V, motor off
@@ -375,6 +390,7 @@ int main(int argc, char** argv) {
       "deadline_misses=%llu sensor_frames=%llu syncs=%llu sensor_dropped=%llu "
       "sensor_corrupted=%llu sensor_silenced=%llu actuator_commands=%llu rejected_commands=%llu "
       "host_heartbeats=%llu host_waits_timed_out=%llu host_given_up=%d plant_rejected_inputs=%llu "
+      "commands_dropped=%llu interface_down=%llu "
       "theta_min=%.4f "
       "theta_max=%.4f within_stops=%d last_v_p=%g last_v_m=%g end=%s\n",
       kProgram, static_cast<unsigned long long>(s.steps), sim_s, s.wall_s,
@@ -386,7 +402,9 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(s.rejected_commands),
       static_cast<unsigned long long>(s.host_heartbeats),
       static_cast<unsigned long long>(s.host_waits_timed_out), s.host_given_up ? 1 : 0,
-      static_cast<unsigned long long>(plant->rejected_commands()), s.steps ? s.theta_min : 0.0,
+      static_cast<unsigned long long>(plant->rejected_commands()),
+      static_cast<unsigned long long>(s.commands_dropped),
+      static_cast<unsigned long long>(s.interface_down), s.steps ? s.theta_min : 0.0,
       s.steps ? s.theta_max : 0.0, within_stops ? 1 : 0, plant->applied_v_p(), plant->applied_v_m(),
       end == End::kDone     ? "duration"
       : end == End::kSignal ? "signal"

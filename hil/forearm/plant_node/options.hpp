@@ -30,11 +30,13 @@ struct Options {
   double duration_s = 0;  // 0: until SIGINT or SIGTERM
   double theta0 = 0;      // rad, at rest, held there by the PAM's equilibrium pressure
   ForearmMismatch mismatch{};
-  double noise_scale = 0;       // multiplies SensorNoise
-  int sensor_delay_ms = 0;      // transport delay of sensor readings
-  FaultConfig sensor_faults{};  // on the Sensor frames
-  bool wait_host = false;       // lock-step: wait for the host's heartbeat every 10 ticks
-  double host_timeout_s = 2;    // ... at most this long, then stop waiting for it
+  double noise_scale = 0;             // multiplies SensorNoise
+  int sensor_delay_ms = 0;            // transport delay of sensor readings
+  FaultConfig sensor_faults{};        // on the Sensor frames
+  bool wait_host = false;             // lock-step: wait for the host's heartbeat every 10 ticks
+  double host_timeout_s = 2;          // ... at most this long, then stop waiting for it
+  double drop_commands_fraction = 0;  // of the board's ActuatorCommand frames, lost on the way
+  double die_at_s = -1;  // test hook: SIGKILL to itself at this simulated time; < 0: never
   std::string log_path;
 };
 
@@ -48,7 +50,7 @@ inline void print_usage(std::FILE* out) {
       "         [--theta0 RAD] [--mass-scale X] [--friction-scale X] [--pam-time-scale X]\n"
       "         [--noise SCALE] [--seed N] [--sensor-delay-ms MS] [--drop-percent P]\n"
       "         [--corrupt-percent P] [--silence-at S] [--silence-ms MS] [--wait-host]\n"
-      "         [--host-timeout S] [--log FILE]\n"
+      "         [--host-timeout S] [--drop-commands-percent P] [--die-at S] [--log FILE]\n"
       "The forearm in Simbody, stepped at 1 ms, speaking the board's CAN protocol: it sends a\n"
       "Sensor frame (theta, theta', P) every step and applies the board's latest\n"
       "ActuatorCommand (v_p, v_m) within the actuators' limits.\n"
@@ -70,6 +72,10 @@ inline void print_usage(std::FILE* out) {
       "  --wait-host          lock-step: every 10 ticks also wait for the host's heartbeat,\n"
       "                       so a run with a host is deterministic\n"
       "  --host-timeout S     ... for at most S s (default 2), then stop waiting for it\n"
+      "  --drop-commands-percent P\n"
+      "                       lose P %% of the board's ActuatorCommand frames (the actuators\n"
+      "                       keep the last command they received)\n"
+      "  --die-at S           test hook: the plant kills itself with SIGKILL at simulated time S\n"
       "  --log FILE           CSV of every step: time, state, inputs, torques\n"
       "Exit status: 0 at the end of --duration or on SIGINT/SIGTERM; 1 when the bus, the log\n"
       "or the board fails (no answer to a Sync in lock-step within 5 s); 2 for bad arguments.\n",
@@ -107,6 +113,9 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& o, std::string
   parser.number("--silence-at", 0, kMaxDurationS, "a time in [0, 1e6] s", silence_at);
   parser.number("--silence-ms", 1, 1e6, "a duration in [1, 1e6] ms", silence_ms);
   parser.flag("--wait-host", o.wait_host);
+  parser.number("--drop-commands-percent", 0, 100, "a percentage in [0, 100]",
+                o.drop_commands_fraction, 0.01);
+  parser.number("--die-at", 0, kMaxDurationS, "a time in [0, 1e6] s", o.die_at_s);
   parser.number("--host-timeout", 0.01, 600, "a number of seconds in [0.01, 600]",
                 o.host_timeout_s);
   parser.text("--log", [&](const std::string& v) -> std::string {

@@ -1,5 +1,7 @@
 #include "hil_run.hpp"
 
+#include <signal.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -26,44 +28,23 @@ std::string number_text(double v) {
   return s.str();
 }
 
-bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::string& error) {
+// A log's header line, then one row per line by `parse(line, row)`.
+template <class Row, class Parse>
+bool read_log(const std::string& path, const char* what, std::vector<Row>& rows, std::string& error,
+              Parse&& parse) {
   std::ifstream in(path);
   std::string line;
   if (!std::getline(in, line)) {
-    error = "plant log " + path + " is empty";
+    error = std::string(what) + " " + path + " is empty";
     return false;
   }
   while (std::getline(in, line)) {
-    PlantRow r{};
-    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &r.time, &r.theta,
-                    &r.theta_dot, &r.pressure_bar, &r.v_p, &r.v_m, &r.tau_p, &r.tau_m) != 8) {
-      error = "plant log " + path;
+    Row r{};
+    if (!parse(line, r)) {
+      error = std::string(what) + " " + path;
       error += ": malformed row '" + line + "'";
       return false;
     }
-    rows.push_back(r);
-  }
-  return true;
-}
-
-bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, std::string& error) {
-  std::ifstream in(path);
-  std::string line;
-  if (!std::getline(in, line)) {
-    error = "board log " + path + " is empty";
-    return false;
-  }
-  while (std::getline(in, line)) {
-    BoardTickRow r;
-    char mode[16] = {}, strategy[16] = {};
-    double wall = 0;
-    if (std::sscanf(line.c_str(), "%u,%lf,%15[^,],%u,%15[^,],%lf,%lf,%u,%u", &r.tick, &wall, mode,
-                    &r.faults, strategy, &r.v_p, &r.v_m, &r.heartbeat_age, &r.sensor_age) != 9) {
-      error = "board log " + path;
-      error += ": malformed row '" + line + "'";
-      return false;
-    }
-    r.mode = mode;
     rows.push_back(r);
   }
   return true;
@@ -74,6 +55,26 @@ std::string strategy_name(proto::Strategy s) {
 }
 
 }  // namespace
+
+bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::string& error) {
+  return read_log(path, "plant log", rows, error, [](const std::string& line, PlantRow& r) {
+    return std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &r.time, &r.theta,
+                       &r.theta_dot, &r.pressure_bar, &r.v_p, &r.v_m, &r.tau_p, &r.tau_m) == 8;
+  });
+}
+
+bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, std::string& error) {
+  return read_log(path, "board log", rows, error, [](const std::string& line, BoardTickRow& r) {
+    char mode[16] = {}, strategy[16] = {};
+    double wall = 0;
+    if (std::sscanf(line.c_str(), "%u,%lf,%15[^,],%u,%15[^,],%lf,%lf,%u,%u", &r.tick, &wall, mode,
+                    &r.faults, strategy, &r.v_p, &r.v_m, &r.heartbeat_age, &r.sensor_age) != 9) {
+      return false;
+    }
+    r.mode = mode;
+    return true;
+  });
+}
 
 std::map<std::string, std::string> parse_summary(const std::string& text) {
   std::map<std::string, std::string> out;
@@ -112,6 +113,7 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
     board_args.push_back("--w-v");
     board_args.push_back(number_text(spec.w_v));
   }
+  board_args.insert(board_args.end(), spec.board_args.begin(), spec.board_args.end());
   std::vector<std::string> host_args{"--lockstep",
                                      "--node",
                                      node,
@@ -164,7 +166,8 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
   result.board = parse_summary(board.output());
   result.plant = parse_summary(plant.output());
   result.host = parse_summary(host.output());
-  if (plant_status != 0 || host_status != 0 || board_status != 0) {
+  const int expected_host_status = spec.host_dies ? 128 + SIGKILL : 0;
+  if (plant_status != 0 || host_status != expected_host_status || board_status != 0) {
     result.error = "exit status plant " + std::to_string(plant_status) + ", host " +
                    std::to_string(host_status) + ", board " + std::to_string(board_status) +
                    " (-1: timed out); plant said: " + plant.errors() +
@@ -177,7 +180,8 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
     return result;
   }
   const std::vector<PlantRow>& rows = result.plant_log;
-  const double t0 = result.number(result.host, "run_start_s");
+  // A host that died left no summary: the run started where its script starts it.
+  const double t0 = spec.host_dies ? spec.run_at_s : result.number(result.host, "run_start_s");
   if (!(t0 >= 0)) {
     result.error = "the host never started the run (run_start_s missing)";
     return result;

@@ -37,8 +37,9 @@ struct HilRunSpec {
   std::uint64_t seed = 1;
   ForearmMismatch mismatch{};
   double w_v = 0;  // board's voltage weight of Eq. 3.3; 0: the thesis's default
-  std::vector<std::string> plant_args, host_args;  // extra options, e.g. fault injection
-  std::string directory;                           // where logs and program outputs go (created)
+  std::vector<std::string> board_args, plant_args, host_args;  // extra options, e.g. faults
+  bool host_dies = false;  // the host is to kill itself (--die-at): it must end by SIGKILL
+  std::string directory;   // where logs and program outputs go (created)
 };
 
 // A row of the plant's log: the state at `time` and the inputs applied during the millisecond
@@ -78,6 +79,11 @@ struct HilRunResult {
 };
 
 HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs);
+
+// The logs the plant node and the board write with --log: the header, then one row per line.
+// False, with `error` naming the file and its first malformed row, when a row does not parse.
+bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::string& error);
+bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, std::string& error);
 
 // "prog: summary k=v k=v ..." -> {k: v}; the last summary line of `text` counts.
 std::map<std::string, std::string> parse_summary(const std::string& text);

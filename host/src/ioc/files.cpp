@@ -1,6 +1,7 @@
 #include "hmpc/ioc/files.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
@@ -152,6 +153,15 @@ std::vector<Demonstration> parse_demonstrations(std::istream& in, const std::str
     if (!to_number(fields[0], id) || id != std::floor(id) || id < 0.0)
       fail(source, line, "demo: not a demonstration number");
     if (!to_number(fields[1], time)) fail(source, line, "time: not a finite number");
+    // Numbered in order from 0: beyond the next number is out of order (and checked before the
+    // number becomes an index, which a huge one could not).
+    if (id > static_cast<double>(demos.size())) {
+      char number[32];
+      std::snprintf(number, sizeof number, "%g", id);
+      fail(source, line,
+           "demonstration " + std::string(number) + " out of order (expected at most " +
+               std::to_string(demos.size()) + ")");
+    }
     const bool new_demo = demos.empty() || static_cast<std::size_t>(id) != demos.size() - 1;
     if (new_demo) {
       if (static_cast<std::size_t>(id) != demos.size()) {

@@ -47,14 +47,18 @@ class RecedingHorizonMpc {
   LayerWork last_work() const { return {result_.work, SolveWork{}}; }
   bool last_plan_usable() const { return plan_is_usable(result_.status); }
 
-  // Offline optimisation of the initial input sequence (Algorithm 1, line 1; Fig. 2.2).
-  Result initialize(const State& x0, int offline_iterations) {
+  // Offline optimisation of the initial input sequence (Algorithm 1, line 1; Fig. 2.2). A
+  // board that must keep its control period passes a `stop` at its deadline: the sequence is
+  // then as good as the time allowed, and the online solves go on improving it.
+  template <class StopPredicate = NeverStop>
+  Result initialize(const State& x0, int offline_iterations,
+                    StopPredicate&& stop = StopPredicate{}) {
     solver_.reset();
     clock_.reset();
     auto config = config_.solver;
     config.max_iterations = offline_iterations;
     solver_.set_config(config);
-    result_ = solver_.solve(problem_, x0);
+    result_ = solver_.solve(problem_, x0, offline_iterations, stop);
     solver_.set_config(config_.solver);
     return result_;
   }

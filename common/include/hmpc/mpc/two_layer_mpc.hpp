@@ -94,15 +94,19 @@ class TwoLayerMpc {
     return plan_is_usable(upper_result_.status) && plan_is_usable(fast_result_.status);
   }
 
-  // Algorithm 1, line 1: the initial input sequence of the upper layer optimised offline.
-  UpperResult initialize(const FullState& x0, int offline_iterations) {
+  // Algorithm 1, line 1: the initial input sequence of the upper layer optimised offline; a
+  // `stop` bounds it in time (as RecedingHorizonMpc::initialize).
+  template <class StopPredicate = NeverStop>
+  UpperResult initialize(const FullState& x0, int offline_iterations,
+                         StopPredicate&& stop = StopPredicate{}) {
     upper_solver_.reset();
     fast_solver_.reset();
     clock_.reset();
     auto config = config_.upper;
     config.max_iterations = offline_iterations;
     upper_solver_.set_config(config);
-    upper_result_ = upper_solver_.solve(upper_problem_, UpperLayer::to_upper(upper_problem_, x0));
+    upper_result_ = upper_solver_.solve(upper_problem_, UpperLayer::to_upper(upper_problem_, x0),
+                                        offline_iterations, stop);
     upper_solver_.set_config(config_.upper);
     return upper_result_;
   }

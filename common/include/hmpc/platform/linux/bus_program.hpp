@@ -65,6 +65,8 @@ inline std::FILE* open_csv_log(const std::string& path, const char* header, std:
     error = "cannot write the log '" + path + "': " + std::strerror(errno);
     return nullptr;
   }
+  // Line-buffered: every row written before the program dies, even by SIGKILL, is in the file.
+  std::setvbuf(log, nullptr, _IOLBF, 0);
   std::fprintf(log, "%s\n", header);
   return log;
 }
