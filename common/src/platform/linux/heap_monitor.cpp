@@ -59,6 +59,44 @@ int __wrap_posix_memalign(void** pointer, std::size_t alignment, std::size_t siz
 // NOLINTEND(bugprone-reserved-identifier)
 }
 
+#if defined(__SANITIZE_THREAD__)
+#define HMPC_SANITIZER_OWNS_NEW 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define HMPC_SANITIZER_OWNS_NEW 1
+#endif
+#endif
+
+#ifdef HMPC_SANITIZER_OWNS_NEW
+// ThreadSanitizer links its own operator new and delete (it must see every allocation), so they
+// cannot be replaced; the linker wraps the program's calls to them instead (the mangled names in
+// common/CMakeLists.txt). Calls made inside libstdc++ itself go uncounted in this build only.
+// NOLINTBEGIN(bugprone-reserved-identifier)
+extern "C" {
+void* __real__Znwm(std::size_t);
+void* __real__Znam(std::size_t);
+void* __real__ZnwmSt11align_val_t(std::size_t, std::align_val_t);
+void* __real__ZnamSt11align_val_t(std::size_t, std::align_val_t);
+
+void* __wrap__Znwm(std::size_t size) {
+  note_allocation();
+  return __real__Znwm(size);
+}
+void* __wrap__Znam(std::size_t size) {
+  note_allocation();
+  return __real__Znam(size);
+}
+void* __wrap__ZnwmSt11align_val_t(std::size_t size, std::align_val_t alignment) {
+  note_allocation();
+  return __real__ZnwmSt11align_val_t(size, alignment);
+}
+void* __wrap__ZnamSt11align_val_t(std::size_t size, std::align_val_t alignment) {
+  note_allocation();
+  return __real__ZnamSt11align_val_t(size, alignment);
+}
+}
+// NOLINTEND(bugprone-reserved-identifier)
+#else
 void* operator new(std::size_t size) {
   if (void* p = std::malloc(size != 0 ? size : 1)) return p;
   throw std::bad_alloc();
@@ -82,3 +120,4 @@ void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#endif
