@@ -55,7 +55,8 @@ struct BoardConfig {
   // Deadline of one MPC step inside its 4 ms period (leaves time for I/O and telemetry).
   double mpc_budget_s = 0.0035;
   // Software joint limits (rad): beyond them the board faults into its safe state.
-  Scalar theta_min = Scalar(-1.2), theta_max = Scalar(1.6);
+  Scalar theta_min = forearm::Parameters<Scalar>{}.soft_limit_lower;
+  Scalar theta_max = forearm::Parameters<Scalar>{}.soft_limit_upper;
   // Safe outputs (idle, fault): valve vented to atmosphere (0 V), motor off. The arm then
   // rests on its mechanical stop; a board with a holding brake would hold instead.
   Scalar safe_v_p = Scalar(0), safe_v_m = Scalar(0);

@@ -27,11 +27,11 @@
 #include <type_traits>
 #include <vector>
 
-#include "fault_injector.hpp"
 #include "hmpc/cli/arguments.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 #include "hmpc/host/forearm_can_master.hpp"
 #include "hmpc/platform/linux/bus_program.hpp"
+#include "hmpc/platform/linux/frame_faults.hpp"
 
 namespace {
 
@@ -60,7 +60,7 @@ struct Options {
   double run_at_s = 0.3, run_for_s = 10;
   long dds_domain = -1;  // < 0: no DDS
   bool dds_loopback = false;
-  hmpc::hil::FaultConfig faults{};
+  hmpc::platform::FaultConfig faults{};
   double stop_heartbeat_at_s = -1;
   double die_at_s = -1;  // test hook: SIGKILL to itself at this host time; < 0: never
   std::string log_path;
@@ -218,7 +218,7 @@ class Host {
       proto::Frame frame;
       if (sender_.encode(message, frame) != proto::EncodeResult::kOk) return;
       const std::uint64_t corrupted_before = faults_.counters().corrupted;
-      if (faults_.apply(t, frame) == hmpc::hil::FaultAction::kDrop) return;
+      if (faults_.apply(t, frame) == hmpc::platform::FaultAction::kDrop) return;
       const CanResult sent = can_.send(hmpc::platform::to_can_frame(frame));
       if (sent.ok()) {
         ++frames_sent_;
@@ -401,7 +401,7 @@ class Host {
   ForearmCanMaster master_;
   proto::Sender sender_;
   proto::Receiver sync_receiver_;
-  hmpc::hil::FaultInjector faults_;
+  hmpc::platform::FaultInjector faults_;
   double now_s_ = 0;
   double run_start_s_ = -1, run_stop_s_ = -1, run_end_s_ = -1;
   double last_active_heartbeat_s_ = -1, heartbeat_max_gap_s_ = 0, last_heartbeat_s_ = -1;

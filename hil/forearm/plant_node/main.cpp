@@ -28,14 +28,17 @@
 #include <vector>
 
 #include "../simbody_forearm.hpp"
-#include "fault_injector.hpp"
 #include "hmpc/platform/linux/bus_program.hpp"
+#include "hmpc/platform/linux/frame_faults.hpp"
 #include "options.hpp"
 
 namespace {
 
 using namespace hmpc::hil;
 using namespace hmpc::hil::plant_node;
+using hmpc::platform::FaultAction;
+using hmpc::platform::FaultCounters;
+using hmpc::platform::FaultInjector;
 namespace proto = hmpc::forearm_protocol;
 using hmpc::platform::CanFrame;
 using hmpc::platform::CanResult;

@@ -7,11 +7,13 @@
 #include <string>
 
 #include "../simbody_forearm.hpp"
-#include "fault_injector.hpp"
 #include "hmpc/cli/arguments.hpp"
+#include "hmpc/platform/linux/frame_faults.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
 namespace hmpc::hil::plant_node {
+
+using platform::FaultConfig;
 
 // Sensor noise at --noise 1 (standard deviations, white, Gaussian): a 14-bit absolute encoder
 // (0.38 mrad steps, std of its quantisation ~0.1 mrad, plus mounting play) gives theta 0.5 mrad;

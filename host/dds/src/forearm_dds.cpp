@@ -13,7 +13,7 @@
 #include <utility>
 
 #include "forearm.h"
-#include "forearm_board.hpp"
+#include "hmpc/models/forearm.hpp"
 
 namespace hmpc::dds {
 
@@ -281,10 +281,10 @@ ForearmCommandSample from_c(const hmpc_dds_ForearmCommand& c) {
 
 const CommandLimits& command_limits() {
   static const CommandLimits limits = [] {
-    const firmware::BoardConfig<double> board{};
+    const forearm::Parameters<double> arm{};
     CommandLimits l;
-    l.theta_min_rad = board.theta_min;
-    l.theta_max_rad = board.theta_max;
+    l.theta_min_rad = arm.soft_limit_lower;
+    l.theta_max_rad = arm.soft_limit_upper;
     return l;
   }();
   return limits;

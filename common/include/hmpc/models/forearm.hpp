@@ -65,10 +65,15 @@ struct Parameters {
   Scalar v_p_min = Scalar(0), v_p_max = Scalar(5);
   Scalar v_m_min = Scalar(-5), v_m_max = Scalar(5);
 
+  // Software joint limits: beyond them the board faults into its safe state, and the host and
+  // the DDS bridge refuse targets outside them. Inside the mechanical stops below, so a
+  // working controller never reaches the stops.
+  Scalar soft_limit_lower = Scalar(-1.2);  // rad
+  Scalar soft_limit_upper = Scalar(1.6);   // rad
+
   // Mechanical end stops of the elbow: only the HIL plant (hil/forearm) has them; Eq. 3.1 and
   // the controllers ignore these fields. The arm rests on the lower stop when the valve is
-  // vented. They lie outside the board's software limits (-1.2, 1.6 rad, forearm_board.hpp),
-  // so a working controller never reaches them. A stiff rubber bumper (our choice): at
+  // vented. A stiff rubber bumper (our choice): at
   // 1e4 N·m/rad the arm's own weight compresses the lower stop by 0.04 mrad. Hunt-Crossley
   // dissipation: the stop torque is k x (1 + d x'), x the penetration and x' its rate, never
   // pulling, so it adds nothing at first touch and damps in proportion to impact speed. With

@@ -1,4 +1,4 @@
-// Fault injection on outgoing CAN frames for the HIL: frames lost or with a bit flipped, at
+// Fault injection on outgoing CAN frames, for the HIL: frames lost or with a bit flipped, at
 // random with a seeded generator (a run is reproducible), and windows of silence. The plant
 // node applies it to its sensor frames (encoder or ADC dropouts, glitches), the host controller
 // to its frames to the board (a lossy or interrupted bus).
@@ -11,7 +11,7 @@
 
 #include "hmpc/protocol/forearm_protocol.hpp"
 
-namespace hmpc::hil {
+namespace hmpc::platform {
 
 struct FaultConfig {
   double drop_fraction = 0;     // share of frames lost, [0, 1]
@@ -78,4 +78,4 @@ class FaultInjector {
   FaultCounters counters_;
 };
 
-}  // namespace hmpc::hil
+}  // namespace hmpc::platform
