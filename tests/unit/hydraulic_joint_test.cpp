@@ -152,6 +152,45 @@ TEST(HydraulicJointChambers, LoadVelocityCouplingOpposesTheMotionWithItsSize) {
   EXPECT_NEAR(hy::load_velocity_coupling(p, 0.0), -5.24e3, 0.05e3);
 }
 
+// The pressure torque's rate, r (A_a dp_a/dt - A_b dp_b/dt), from the model's derivative.
+double torque_rate(const Parameters& p, const State& s, double theta, double theta_dot) {
+  const State d = hy::derivative(p, s, theta, theta_dot, s.spool);
+  return p.lever * (p.area_a * d.pressure_a - p.area_b * d.pressure_b);
+}
+
+// The linearised gains against central differences of the model, at operating points on both
+// sides of the valve's centre; and the cancellation load-velocity feedback relies on: a spool
+// opened by (k_v / k_q) theta' more leaves the torque's rate what it was with the joint still.
+TEST(HydraulicJointLinearisation, GainsMatchTheModelAndTheirRatioCancelsTheMotion) {
+  const Parameters p;
+  for (const State& s : {State{0.2, 9e6, 5e6}, State{-0.3, 6e6, 11e6}, State{0.0, 8e6, 8e6}}) {
+    for (double theta : {-0.4, 0.3}) {
+      SCOPED_TRACE(testing::Message() << "spool " << s.spool << " theta " << theta);
+      const hy::TorqueRateGains<double> g = hy::torque_rate_gains(p, s, theta);
+      const double h = 1e-4;
+      State up = s, down = s;
+      // Stay on the operating point's side of the centre: the flows are linear there.
+      up.spool = s.spool >= 0 ? s.spool + 2 * h : s.spool;
+      down.spool = s.spool >= 0 ? s.spool : s.spool - 2 * h;
+      const double valve_slope =
+          (torque_rate(p, up, theta, 0.0) - torque_rate(p, down, theta, 0.0)) / (2 * h);
+      EXPECT_NEAR(g.valve, valve_slope, 1e-6 * g.valve);
+      const double velocity_slope =
+          (torque_rate(p, s, theta, 1e-3) - torque_rate(p, s, theta, -1e-3)) / 2e-3;
+      EXPECT_NEAR(-g.load_velocity, velocity_slope, 1e-6 * g.load_velocity);
+      EXPECT_GT(g.valve, 0);
+      EXPECT_GT(g.load_velocity, 0);
+
+      const double omega = 0.8;
+      State compensated = s;
+      compensated.spool = s.spool + g.load_velocity / g.valve * omega;
+      if ((compensated.spool >= 0) != (s.spool >= 0)) continue;  // crossed the centre
+      EXPECT_NEAR(torque_rate(p, compensated, theta, omega), torque_rate(p, s, theta, 0.0),
+                  1e-6 * std::abs(g.load_velocity * omega));
+    }
+  }
+}
+
 // A blocked joint (held still) with the valve fully open settles with the supply on one side
 // and the return on the other: its torque is then the stall torque, and the valve passes no
 // more flow.

@@ -189,4 +189,33 @@ Scalar load_velocity_coupling(const JointActuatorParameters<Scalar>& p, Scalar t
           p.area_b * p.area_b / chamber_volume_b(p, theta));
 }
 
+// The torque's rate, linearised about an operating point (pressures p_a, p_b, joint at theta):
+//   d tau / dt = k_q xv - k_v theta'
+// from the equations above with the chambers' flows linear in the spool opening xv on each side
+// of the valve's centre (the side of the state's spool; xv >= 0 when it is 0):
+//   k_q = r beta K (A_a g_a / V_a + A_b g_b / V_b),  k_v = r^2 beta (A_a^2 / V_a + A_b^2 / V_b)
+// with g_a, g_b the orifice roots across the two open lands. k_v / k_q is the load-velocity
+// gain that cancels the joint's motion from the torque (LoadVelocityFeedbackPid).
+template <typename Scalar>
+struct TorqueRateGains {
+  Scalar valve = Scalar(0);          // k_q, N·m/s per unit spool opening
+  Scalar load_velocity = Scalar(0);  // k_v, N·m/s per rad/s
+};
+template <typename Scalar>
+TorqueRateGains<Scalar> torque_rate_gains(const JointActuatorParameters<Scalar>& p,
+                                          const JointActuatorState<Scalar>& s, Scalar theta) {
+  const Scalar pt = p.transition_pressure;
+  const bool positive_side = s.spool >= Scalar(0);
+  const Scalar g_a = positive_side ? orifice_root(p.supply_pressure - s.pressure_a, pt)
+                                   : orifice_root(s.pressure_a - p.return_pressure, pt);
+  const Scalar g_b = positive_side ? orifice_root(s.pressure_b - p.return_pressure, pt)
+                                   : orifice_root(p.supply_pressure - s.pressure_b, pt);
+  const Scalar va = chamber_volume_a(p, theta), vb = chamber_volume_b(p, theta);
+  TorqueRateGains<Scalar> gains;
+  gains.valve =
+      p.lever * p.bulk_modulus * p.valve_flow_gain * (p.area_a * g_a / va + p.area_b * g_b / vb);
+  gains.load_velocity = -load_velocity_coupling(p, theta);
+  return gains;
+}
+
 }  // namespace hmpc::hydraulic
