@@ -22,6 +22,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -243,11 +244,15 @@ StopReason run_real_time(Board& board, BoardLoop& loop, SocketCan& can, int sign
     const double woke_s = monotonic_seconds();
     // The earliest of these expirations was due at this time.
     const double due_s = timer_start_s + 1e-3 * double(expirations_total + 1);
-    expirations_total += expirations;
+    // A late wake-up catches up its ticks, but never past --duration.
+    const std::uint64_t ticks = duration_ticks > 0
+                                    ? std::min(expirations, duration_ticks - expirations_total)
+                                    : expirations;
+    expirations_total += ticks;
     stats.timer_overruns += expirations - 1;
     if (woke_s - due_s > stats.max_wakeup_latency_s) stats.max_wakeup_latency_s = woke_s - due_s;
     bool mpc_due = false;
-    for (std::uint64_t i = 0; i < expirations; ++i) {
+    for (std::uint64_t i = 0; i < ticks; ++i) {
       if (!drain(
               can, loop, [](bool) {}, failure))
         return StopReason::kBusError;
