@@ -1,7 +1,8 @@
-// Fuzz target for the forearm protocol's decoders. Input bytes become frames, 11 bytes each
-// (identifier, 2 bytes little-endian, masked to 11 bits; DLC byte; 8 data bytes, zero-padded),
-// and every frame goes to every decoder through the receiver of the node its identifier
-// names, so counter tracking sees sequences and wrong-id rejects are exercised too. Properties of
+// Fuzz target for the decoders of both board protocols (forearm and joint). Input bytes become
+// frames, 11 bytes each (identifier, 2 bytes little-endian, masked to 11 bits; DLC byte; 8 data
+// bytes, zero-padded), and every frame goes to every decoder of each protocol through that
+// protocol's receiver of the node its identifier names, so counter tracking sees sequences and
+// wrong-id rejects are exercised too. Properties of
 // every frame a decoder accepts: each value is finite, inside its signal's [min, max] and, for
 // enumerations, a listed value; it encodes again and decodes to the same values. Every decode is
 // accepted or counted as exactly one reject.
@@ -18,10 +19,16 @@
 #include <cstdlib>
 
 #include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/protocol/joint_protocol.hpp"
 
 namespace {
 
-using namespace hmpc::forearm_protocol;
+namespace protocol = hmpc::protocol;
+using protocol::DecodeResult;
+using protocol::EncodeResult;
+using protocol::Frame;
+using protocol::NodeId;
+namespace detail = protocol::detail;
 
 constexpr std::size_t kBytesPerFrame = 11;
 
@@ -37,16 +44,17 @@ constexpr std::size_t kBytesPerFrame = 11;
 struct CheckValues {
   const Frame* frame;
 
+  template <class Signal>
   void operator()(Signal signal, const float& value) const {
-    const SignalSpec& s = signal_spec(signal);
+    const auto& s = signal_spec(signal);
     if (!std::isfinite(value)) fail("non-finite value accepted", *frame, s.name);
     if (value < static_cast<float>(s.min) || value > static_cast<float>(s.max)) {
       fail("out-of-range value accepted", *frame, s.name);
     }
   }
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
+  template <class Signal, class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
   void operator()(Signal signal, const T& value) const {
-    const SignalSpec& s = signal_spec(signal);
+    const auto& s = signal_spec(signal);
     const std::int64_t raw = detail::integer_value(value);
     if (raw < raw_min(s) || raw > raw_max(s)) fail("out-of-range integer accepted", *frame, s.name);
     if (s.values.count == 0) return;
@@ -58,11 +66,15 @@ struct CheckValues {
 };
 
 // Every value of a message by signal, to compare two messages.
+template <class P>
 struct Values {
-  std::array<double, kSignalCount> by_signal{};
+  std::array<double, protocol::signal_count<P>()> by_signal{};
 
-  void operator()(Signal signal, const float& value) { by_signal[index_of(signal)] = value; }
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
+  template <class Signal>
+  void operator()(Signal signal, const float& value) {
+    by_signal[index_of(signal)] = value;
+  }
+  template <class Signal, class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
   void operator()(Signal signal, const T& value) {
     by_signal[index_of(signal)] = static_cast<double>(detail::integer_value(value));
   }
@@ -75,35 +87,59 @@ struct Tally {
 
 Tally all_inputs;  // over every call, so a replay can show the properties were exercised
 
-template <class Message>
-void try_decoder(Receiver& receiver, const Frame& frame, Tally& tally) {
+template <class Message, class P>
+void try_decoder(protocol::Receiver<P>& receiver, const Frame& frame, Tally& tally) {
   Message message{};
   ++tally.decodes;
   if (receiver.decode(frame, message) != DecodeResult::kOk) return;
   ++tally.accepted;
   Message::visit(message, CheckValues{&frame});
   Frame again;
-  if (encode(message, receiver.node, again) != EncodeResult::kOk) {
+  if (protocol::encode(message, receiver.node, again) != EncodeResult::kOk) {
     fail("accepted message does not encode", frame, "-");
   }
   Message round{};
-  if (decode(again, receiver.node, round) != DecodeResult::kOk) {
+  if (protocol::decode(again, receiver.node, round) != DecodeResult::kOk) {
     fail("re-encoded message does not decode", frame, "-");
   }
-  Values before;
-  Values after;
+  Values<P> before;
+  Values<P> after;
   Message::visit(message, before);
   Message::visit(round, after);
   if (before.by_signal != after.by_signal) fail("re-encoding changed a value", frame, "-");
 }
 
+// One protocol's receivers, one per node, and the frames they took.
+template <class P>
+struct ProtocolUnderTest {
+  std::array<protocol::Receiver<P>, P::kIds.max_node + 1u> receivers{};
+  ProtocolUnderTest() {
+    for (std::size_t node = 0; node < receivers.size(); ++node) {
+      receivers[node].node = static_cast<NodeId>(node);
+    }
+  }
+
+  // Every decoder of the protocol, through the receiver of the node the identifier names (any
+  // one for identifiers of no frame of the protocol).
+  template <class... Messages>
+  void decode(const Frame& frame, Tally& tally, protocol::MessageList<Messages...>) {
+    typename P::FrameType type{};
+    NodeId node = 0;
+    if (!identify(frame.id, type, node)) node = static_cast<NodeId>(frame.id % receivers.size());
+    (try_decoder<Messages>(receivers[node], frame, tally), ...);
+  }
+  std::uint64_t rejected() const {
+    std::uint64_t total = 0;
+    for (const auto& receiver : receivers) total += receiver.rejects.total();
+    return total;
+  }
+};
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  std::array<Receiver, kMaxNodeId + 1> receivers{};
-  for (std::size_t node = 0; node < receivers.size(); ++node) {
-    receivers[node].node = static_cast<NodeId>(node);
-  }
+  ProtocolUnderTest<hmpc::forearm_protocol::Description> forearm;
+  ProtocolUnderTest<hmpc::joint_protocol::Description> joint;
   Tally tally;
   for (std::size_t at = 0; at < size; at += kBytesPerFrame) {
     std::array<std::uint8_t, kBytesPerFrame> bytes{};
@@ -112,24 +148,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     frame.id = (bytes[0] | (std::uint32_t{bytes[1]} << 8)) & 0x7FFu;
     frame.dlc = bytes[2];
     for (std::size_t i = 0; i < frame.data.size(); ++i) frame.data[i] = bytes[3 + i];
-    // The receiver of the node the identifier names; any one for foreign identifiers.
-    FrameType type{};
-    NodeId node = 0;
-    if (!identify(frame.id, type, node)) node = static_cast<NodeId>(frame.id % receivers.size());
-    Receiver& receiver = receivers[node];
-    try_decoder<ModeCommand>(receiver, frame, tally);
-    try_decoder<SensorSample>(receiver, frame, tally);
-    try_decoder<ActuatorCommand>(receiver, frame, tally);
-    try_decoder<TrajectorySample>(receiver, frame, tally);
-    try_decoder<BoardStatus>(receiver, frame, tally);
-    try_decoder<JointState>(receiver, frame, tally);
-    try_decoder<ActuatorOutputs>(receiver, frame, tally);
-    try_decoder<SolveTelemetry>(receiver, frame, tally);
-    try_decoder<Gains>(receiver, frame, tally);
-    try_decoder<Sync>(receiver, frame, tally);
+    forearm.decode(frame, tally, hmpc::forearm_protocol::Messages{});
+    joint.decode(frame, tally, hmpc::joint_protocol::Messages{});
   }
-  std::uint64_t rejected = 0;
-  for (const Receiver& receiver : receivers) rejected += receiver.rejects.total();
+  const std::uint64_t rejected = forearm.rejected() + joint.rejected();
   if (tally.accepted + rejected != tally.decodes) {
     std::fprintf(stderr, "protocol fuzz: %llu decodes, %llu accepted, %llu counted rejects\n",
                  static_cast<unsigned long long>(tally.decodes),
@@ -150,26 +172,33 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
 namespace {
 
-// A frame the decoders accept: random node and frame type, each signal a random valid raw
-// value, correct checksum.
+// A frame the decoders of protocol P accept: random node and frame type, each signal a random
+// valid raw value, correct checksum.
+template <class P>
 Frame random_valid_frame(std::mt19937_64& rng) {
-  const FrameSpec& spec = kFrames[rng() % kFrameTypeCount];
+  const auto& spec = P::kFrames[rng() % protocol::frame_type_count<P>()];
   std::uint64_t payload = 0;
-  for (std::size_t i = 0; i < kSignalCount; ++i) {
-    const SignalSpec& s = kSignals[i];
-    if (s.frame != spec.type || s.kind == SignalKind::kChecksum) continue;
+  for (std::size_t i = 0; i < protocol::signal_count<P>(); ++i) {
+    const auto& s = P::kSignals[i];
+    if (s.frame != spec.type || s.kind == protocol::SignalKind::kChecksum) continue;
     const std::int64_t raw = s.values.count > 0 ? s.values.values[rng() % s.values.count].value
                                                 : std::uniform_int_distribution<std::int64_t>(
                                                       raw_min(s), raw_max(s))(rng);
-    detail::insert_raw(payload, detail::kCodecSpecs[i], raw);
+    detail::insert_raw(payload, detail::kCodecSpecs<P>[i], raw);
   }
   Frame frame;
-  frame.id = frame_id(spec.type, static_cast<NodeId>(rng() % (kMaxNodeId + 1)));
+  frame.id = frame_id(spec.type, static_cast<NodeId>(rng() % (P::kIds.max_node + 1u)));
   frame.dlc = spec.dlc;
   for (std::size_t i = 0; i < frame.data.size(); ++i)
     frame.data[i] = static_cast<std::uint8_t>(payload >> (8 * i));
-  frame.data[kChecksumByte] = frame_checksum(frame);
+  frame.data[protocol::kChecksumByte] = protocol::frame_checksum(frame);
   return frame;
+}
+
+// Either protocol's, at even odds.
+Frame random_valid_frame(std::mt19937_64& rng) {
+  return rng() % 2 ? random_valid_frame<hmpc::forearm_protocol::Description>(rng)
+                   : random_valid_frame<hmpc::joint_protocol::Description>(rng);
 }
 
 std::vector<std::uint8_t> bytes_of(const Frame& frame) {

@@ -1,11 +1,12 @@
-// common/protocol/hmpc_forearm.dbc against the protocol header's tables: every message and
-// signal, with id, length, sender, cycle time, bit layout, scaling, range, unit, receivers
-// and value descriptions, and nothing in one that is not in the other. The DBC is read by a
-// small parser here, so the check needs no external tool.
+// Each protocol's DBC (common/protocol/hmpc_forearm.dbc, hmpc_joint.dbc) against its header's
+// tables: every message and signal, with id, length, sender, cycle time, bit layout, scaling,
+// range, unit, receivers and value descriptions, and nothing in one that is not in the other.
+// The DBC is read by a small parser here, so the check needs no external tool.
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <iomanip>
 #include <map>
 #include <set>
@@ -14,14 +15,19 @@
 #include <vector>
 
 #include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/protocol/joint_protocol.hpp"
 
-#ifndef HMPC_FOREARM_DBC
-#error "HMPC_FOREARM_DBC must name the DBC file (set in tests/CMakeLists.txt)"
+#if !defined(HMPC_FOREARM_DBC) || !defined(HMPC_JOINT_DBC)
+#error "HMPC_FOREARM_DBC and HMPC_JOINT_DBC must name the DBC files (set in tests/CMakeLists.txt)"
 #endif
 
 namespace {
 
-using namespace hmpc::forearm_protocol;
+using hmpc::protocol::ByteOrder;
+using hmpc::protocol::frame_id;
+using hmpc::protocol::frame_spec;
+using hmpc::protocol::signal_spec;
+using hmpc::protocol::to_string;
 
 struct DbcSignal {
   std::string name;
@@ -190,24 +196,42 @@ Dbc parse_dbc(std::istream& in) {
   return dbc;
 }
 
+struct Forearm {
+  using Description = hmpc::forearm_protocol::Description;
+  static constexpr const char* kPath = HMPC_FOREARM_DBC;
+  static std::set<std::string> nodes() { return {"HOST", "BOARD", "PLANT"}; }
+};
+struct Joint {
+  using Description = hmpc::joint_protocol::Description;
+  static constexpr const char* kPath = HMPC_JOINT_DBC;
+  static std::set<std::string> nodes() { return {"HOST", "BOARD", "PLANT", "IMU"}; }
+};
+
+template <class Protocol>
 Dbc load() {
-  std::ifstream file(HMPC_FOREARM_DBC);
-  EXPECT_TRUE(file.good()) << "cannot open " << HMPC_FOREARM_DBC;
+  std::ifstream file(Protocol::kPath);
+  EXPECT_TRUE(file.good()) << "cannot open " << Protocol::kPath;
   return parse_dbc(file);
 }
 
-TEST(DbcFile, ParsesWithHeaderNodesAndNoUnknownLines) {
-  const Dbc dbc = load();
+template <class Protocol>
+class DbcFile : public ::testing::Test {};
+using Protocols = ::testing::Types<Forearm, Joint>;
+TYPED_TEST_SUITE(DbcFile, Protocols);
+
+TYPED_TEST(DbcFile, ParsesWithHeaderNodesAndNoUnknownLines) {
+  const Dbc dbc = load<TypeParam>();
   EXPECT_TRUE(dbc.has_version);
-  EXPECT_EQ(dbc.nodes, (std::set<std::string>{"HOST", "BOARD", "PLANT"}));
+  EXPECT_EQ(dbc.nodes, TypeParam::nodes());
   for (const std::string& error : dbc.errors) ADD_FAILURE() << error;
 }
 
 // The DBC shows node 0's identifiers.
-TEST(DbcFile, MessagesMatchTheFrameTable) {
-  const Dbc dbc = load();
-  EXPECT_EQ(dbc.messages.size(), kFrameTypeCount);
-  for (const FrameSpec& frame : kFrames) {
+TYPED_TEST(DbcFile, MessagesMatchTheFrameTable) {
+  using P = typename TypeParam::Description;
+  const Dbc dbc = load<TypeParam>();
+  EXPECT_EQ(dbc.messages.size(), std::size(P::kFrames));
+  for (const auto& frame : P::kFrames) {
     const auto it = dbc.messages.find(frame_id(frame.type, 0));
     ASSERT_NE(it, dbc.messages.end()) << frame.name << " missing";
     const DbcMessage& m = it->second;
@@ -219,14 +243,15 @@ TEST(DbcFile, MessagesMatchTheFrameTable) {
   }
 }
 
-TEST(DbcFile, SignalsMatchTheSignalTable) {
-  const Dbc dbc = load();
-  for (const FrameSpec& frame : kFrames) {
+TYPED_TEST(DbcFile, SignalsMatchTheSignalTable) {
+  using P = typename TypeParam::Description;
+  const Dbc dbc = load<TypeParam>();
+  for (const auto& frame : P::kFrames) {
     const auto it = dbc.messages.find(frame_id(frame.type, 0));
     ASSERT_NE(it, dbc.messages.end()) << frame.name;
     const DbcMessage& m = it->second;
     std::set<std::string> in_table;
-    for (const SignalSpec& s : kSignals) {
+    for (const auto& s : P::kSignals) {
       if (s.frame != frame.type) continue;
       in_table.insert(s.name);
       const auto found = m.signals.find(s.name);
@@ -254,10 +279,11 @@ TEST(DbcFile, SignalsMatchTheSignalTable) {
   }
 }
 
-TEST(DbcFile, ValueTablesMatchTheEnumerations) {
-  const Dbc dbc = load();
+TYPED_TEST(DbcFile, ValueTablesMatchTheEnumerations) {
+  using P = typename TypeParam::Description;
+  const Dbc dbc = load<TypeParam>();
   std::size_t enumerated = 0;
-  for (const SignalSpec& s : kSignals) {
+  for (const auto& s : P::kSignals) {
     const auto it = dbc.values.find({frame_id(s.frame, 0), s.name});
     if (s.values.count == 0) {
       EXPECT_EQ(it, dbc.values.end()) << s.name << " has a VAL_ table but is no enumeration";
@@ -276,7 +302,7 @@ TEST(DbcFile, ValueTablesMatchTheEnumerations) {
 }
 
 // The parser itself: a signal with the wrong layout must be found.
-TEST(DbcFile, ParserSeesADifference) {
+TEST(DbcParser, SeesADifference) {
   std::istringstream text(
       "VERSION \"\"\nBU_: HOST BOARD PLANT\nBO_ 257 Sensor: 8 PLANT\n"
       " SG_ theta : 16|16@1+ (0.0001,0) [-3.1416|3.1416] \"rad\" BOARD\n"
@@ -285,7 +311,8 @@ TEST(DbcFile, ParserSeesADifference) {
   ASSERT_TRUE(dbc.errors.empty());
   const DbcSignal& theta = dbc.messages.at(257).signals.at("theta");
   EXPECT_EQ(theta.sign, '+');
-  EXPECT_NE(theta.sign, signal_spec(Signal::kSensorTheta).is_signed ? '-' : '+');
+  EXPECT_NE(theta.sign,
+            signal_spec(hmpc::forearm_protocol::Signal::kSensorTheta).is_signed ? '-' : '+');
   EXPECT_EQ(theta.factor, 0.0001);
   EXPECT_EQ(dbc.values.at({257, "theta"}).at(1), "one");
 }

@@ -1,5 +1,5 @@
-// The forearm board's CAN codec: identifiers, checksum, round trips of every frame, and
-// rejection (and counting) of every malformed frame class.
+// The CAN codec over both board protocols (forearm and joint): identifiers, checksum, round
+// trips of every frame of each, and rejection (and counting) of every malformed frame class.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,14 +14,23 @@
 #include <utility>
 
 #include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/protocol/joint_protocol.hpp"
 
 namespace {
 
 using namespace hmpc::forearm_protocol;
+namespace jp = hmpc::joint_protocol;
+using hmpc::protocol::MessageDescription;
+using hmpc::protocol::signal_count;
 
-using MessageTypes =
-    ::testing::Types<ModeCommand, SensorSample, ActuatorCommand, TrajectorySample, BoardStatus,
-                     JointState, ActuatorOutputs, SolveTelemetry, Gains, Sync>;
+template <class A, class B>
+struct BothLists;
+template <class... A, class... B>
+struct BothLists<hmpc::protocol::MessageList<A...>, hmpc::protocol::MessageList<B...>> {
+  using type = ::testing::Types<A..., B...>;
+};
+// Every message of both protocols.
+using MessageTypes = BothLists<Messages, jp::Messages>::type;
 
 // Sets every field to the point `fraction` of the way through its signal's range (for
 // enumerations: through the list of values). Physical values move `nudge` resolution steps
@@ -30,14 +39,15 @@ struct FillAt {
   double fraction = 0;
   double nudge = 0;
 
-  void operator()(Signal signal, float& value) const {
-    const SignalSpec& s = signal_spec(signal);
+  template <class AnySignal>
+  void operator()(AnySignal signal, float& value) const {
+    const auto& s = signal_spec(signal);
     const double x = s.min + fraction * (s.max - s.min) + nudge * s.factor;
     value = static_cast<float>(x < s.min ? s.min : x > s.max ? s.max : x);
   }
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  void operator()(Signal signal, T& value) const {
-    const SignalSpec& s = signal_spec(signal);
+  template <class AnySignal, class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
+  void operator()(AnySignal signal, T& value) const {
+    const auto& s = signal_spec(signal);
     if (s.values.count > 0) {
       const auto i = static_cast<std::size_t>(std::lround(fraction * (s.values.count - 1)));
       value = static_cast<T>(s.values.values[i].value);
@@ -52,13 +62,14 @@ struct FillAt {
 struct FillRandom {
   std::mt19937_64* rng;
 
-  void operator()(Signal signal, float& value) const {
-    const SignalSpec& s = signal_spec(signal);
+  template <class AnySignal>
+  void operator()(AnySignal signal, float& value) const {
+    const auto& s = signal_spec(signal);
     value = static_cast<float>(std::uniform_real_distribution<double>(s.min, s.max)(*rng));
   }
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  void operator()(Signal signal, T& value) const {
-    const SignalSpec& s = signal_spec(signal);
+  template <class AnySignal, class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
+  void operator()(AnySignal signal, T& value) const {
+    const auto& s = signal_spec(signal);
     if (s.values.count > 0) {
       std::uniform_int_distribution<int> pick(0, s.values.count - 1);
       value = static_cast<T>(s.values.values[pick(*rng)].value);
@@ -70,50 +81,58 @@ struct FillRandom {
 };
 
 // Every field's value by signal, so two messages can be compared signal by signal.
+template <class P>
 struct Snapshot {
-  std::array<double, kSignalCount> value{};
+  std::array<double, signal_count<P>()> value{};
 
-  void operator()(Signal signal, const float& v) { value[index_of(signal)] = v; }
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  void operator()(Signal signal, const T& v) {
+  template <class AnySignal>
+  void operator()(AnySignal signal, const float& v) {
+    value[index_of(signal)] = v;
+  }
+  template <class AnySignal, class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
+  void operator()(AnySignal signal, const T& v) {
     value[index_of(signal)] = static_cast<double>(detail::integer_value(v));
   }
 };
 
 template <class Message>
-Snapshot snapshot(const Message& message) {
-  Snapshot s;
+Snapshot<MessageDescription<Message>> snapshot(const Message& message) {
+  Snapshot<MessageDescription<Message>> s;
   Message::visit(message, s);
   return s;
 }
 
 // Sets the n-th float field (in visit order) to a given value.
+template <class AnySignal>
 struct SetNthFloat {
   int n;
   float to;
   int seen = 0;
-  Signal hit{};
+  AnySignal hit{};
 
-  void operator()(Signal signal, float& value) {
+  void operator()(AnySignal signal, float& value) {
     if (seen++ == n) {
       value = to;
       hit = signal;
     }
   }
   template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  void operator()(Signal, T&) {}
+  void operator()(AnySignal, T&) {}
 };
+template <class Message>
+using SetNthFloatOf = SetNthFloat<typename MessageDescription<Message>::Signal>;
 
 template <class Message>
 int float_field_count() {
   Message message{};
-  SetNthFloat counter{-1, 0};
+  SetNthFloatOf<Message> counter{-1, 0};
   Message::visit(message, counter);
   return counter.seen;
 }
 
 // Tolerance of a round trip: half a resolution step plus float rounding of the value.
-double quantisation_bound(const SignalSpec& s, double value) {
+template <class Spec>
+double quantisation_bound(const Spec& s, double value) {
   return 0.5 * s.factor +
          4 * std::numeric_limits<float>::epsilon() * std::max(1.0, std::abs(value));
 }
@@ -126,9 +145,9 @@ void expect_round_trip(const Message& sent, NodeId node) {
   EXPECT_EQ(frame.dlc, 8);
   Message received{};
   ASSERT_EQ(decode(frame, node, received), DecodeResult::kOk);
-  const Snapshot a = snapshot(sent);
-  const Snapshot b = snapshot(received);
-  for (const SignalSpec& s : kSignals) {
+  const auto a = snapshot(sent);
+  const auto b = snapshot(received);
+  for (const auto& s : MessageDescription<Message>::kSignals) {
     if (s.frame != Message::kType || s.kind == SignalKind::kChecksum) continue;
     const double in = a.value[index_of(s.signal)];
     const double out = b.value[index_of(s.signal)];
@@ -143,8 +162,9 @@ void expect_round_trip(const Message& sent, NodeId node) {
 }
 
 // Overwrites one signal's raw bits and reseals the frame with a valid checksum.
-void set_raw(Frame& frame, Signal signal, std::int64_t raw) {
-  const detail::CodecSpec& spec = detail::kCodecSpecs[index_of(signal)];
+template <class AnySignal>
+void set_raw(Frame& frame, AnySignal signal, std::int64_t raw) {
+  const detail::CodecSpec& spec = detail::codec_spec(signal);
   std::uint64_t payload =
       detail::payload_of(frame) & ~(detail::low_bits(spec.length) << spec.start_bit);
   detail::insert_raw(payload, spec, raw);
@@ -282,7 +302,8 @@ class ProtocolRoundTrip : public ::testing::Test {};
 struct FrameName {
   template <class Message>
   static std::string GetName(int) {
-    return frame_spec(Message::kType).name;
+    const bool forearm = std::is_same_v<MessageDescription<Message>, Description>;
+    return std::string(forearm ? "Forearm" : "Joint") + frame_spec(Message::kType).name;
   }
 };
 TYPED_TEST_SUITE(ProtocolRoundTrip, MessageTypes, FrameName);
@@ -319,7 +340,7 @@ TYPED_TEST(ProtocolRoundTrip, EncodeRejectsNonFiniteValues) {
           -std::numeric_limits<float>::infinity()}) {
       TypeParam message{};
       TypeParam::visit(message, FillAt{0.5, 0});
-      SetNthFloat set{n, bad};
+      SetNthFloatOf<TypeParam> set{n, bad};
       TypeParam::visit(message, set);
       Frame frame;
       frame.id = 0x7FF;
@@ -338,10 +359,10 @@ TYPED_TEST(ProtocolRoundTrip, EncodeRejectsOutOfRangeValues) {
     for (const bool above : {true, false}) {
       TypeParam message{};
       TypeParam::visit(message, FillAt{0.5, 0});
-      SetNthFloat find{n, 0};
+      SetNthFloatOf<TypeParam> find{n, 0};
       TypeParam::visit(message, find);
-      const SignalSpec& s = signal_spec(find.hit);
-      SetNthFloat set{n, static_cast<float>(above ? s.max + s.factor : s.min - s.factor)};
+      const auto& s = signal_spec(find.hit);
+      SetNthFloatOf<TypeParam> set{n, static_cast<float>(above ? s.max + s.factor : s.min - s.factor)};
       TypeParam::visit(message, set);
       Frame frame;
       frame.data.fill(0xAA);
@@ -355,7 +376,8 @@ TYPED_TEST(ProtocolRoundTrip, EncodeRejectsOutOfRangeValues) {
   Frame frame;
   EXPECT_EQ(encode(message, 0, frame), EncodeResult::kOutOfRange);
   message.counter = 0;
-  EXPECT_EQ(encode(message, kMaxNodeId + 1, frame), EncodeResult::kInvalidNode);
+  EXPECT_EQ(encode(message, MessageDescription<TypeParam>::kIds.max_node + 1, frame),
+            EncodeResult::kInvalidNode);
 }
 
 TEST(ProtocolEncode, RejectsUnknownEnumerators) {
@@ -594,6 +616,132 @@ TEST(ProtocolBusLoad, RobotAndHilSetups) {
   // Below the ~70 % beyond which lower-priority frames on a classic CAN bus start to queue
   // for whole frame times: the HIL also fits a real 1 Mbit/s bus.
   EXPECT_LT(bus_load(Setup::kHil, 1'000'000), 0.7);
+}
+
+// ---------------------------------------------------------------------------------------
+// The joint protocol's own layout: bus-wide frames, the wider node stride, per-joint frames.
+
+TEST(JointProtocolIds, BusWideFramesAndNodeStride) {
+  EXPECT_EQ(frame_id(jp::FrameType::kEStop, 0), 0x080u);
+  EXPECT_EQ(frame_id(jp::FrameType::kEStop, 9), 0x080u);
+  EXPECT_EQ(frame_id(jp::FrameType::kSync, 3), 0x081u);
+  EXPECT_EQ(frame_id(jp::FrameType::kModeCommand, 0), 0x200u);
+  EXPECT_EQ(frame_id(jp::FrameType::kValveDrive, 15), 0x3F6u);
+  EXPECT_EQ(frame_id(jp::joint_frame(jp::FrameType::kJointState0, 3), 1), 0x228u);
+  for (NodeId node = 0; node <= jp::kIds.max_node; ++node) {
+    for (const jp::FrameSpec& spec : jp::kFrames) {
+      jp::FrameType type{};
+      NodeId found = 99;
+      ASSERT_TRUE(identify(frame_id(spec.type, node), type, found));
+      EXPECT_EQ(type, spec.type);
+      EXPECT_EQ(found, spec.bus_wide ? 0 : node);
+    }
+  }
+  jp::FrameType type{};
+  NodeId node = 0;
+  EXPECT_FALSE(identify(0x1FF, type, node));  // the forearm protocol's range
+  EXPECT_FALSE(identify(0x20E, type, node));  // offset 0x0E: no frame
+  EXPECT_FALSE(identify(0x400, type, node));
+  EXPECT_FALSE(identify(0x082, type, node));
+  // Neither protocol takes the other's frames for its own.
+  FrameType forearm_type{};
+  for (const jp::FrameSpec& spec : jp::kFrames) {
+    EXPECT_FALSE(identify(frame_id(spec.type, 0), forearm_type, node)) << spec.name;
+  }
+}
+
+TEST(JointProtocolLayout, TorqueReferenceBytes) {
+  jp::TorqueReference reference;
+  reference.tau = {1.0f, -1.0f, 200.0f, -0.05f};
+  reference.counter = 7;
+  Frame frame;
+  ASSERT_EQ(encode(reference, 1, frame), EncodeResult::kOk);
+  EXPECT_EQ(frame.id, 0x221u);
+  // 13-bit two's complement at 0.05 N.m from bit 12: 20, -20 (0x1FEC), 4000 (0xFA0), -1 (0x1FFF).
+  const std::uint64_t expected_payload = (std::uint64_t{7} << 8) | (std::uint64_t{20} << 12) |
+                                         (std::uint64_t{0x1FEC} << 25) |
+                                         (std::uint64_t{0xFA0} << 38) |
+                                         (std::uint64_t{0x1FFF} << 51);
+  EXPECT_EQ(detail::payload_of(frame) & ~std::uint64_t{0xFF}, expected_payload);
+  EXPECT_EQ(frame.data[kChecksumByte], frame_checksum(frame));
+}
+
+// An E-stop must say engage = 1: a zeroed payload, even with a valid checksum, stops nothing.
+TEST(JointProtocolRejects, EStopWithoutEngageAndUnknownModes) {
+  jp::Receiver receiver{2};
+  jp::EStop stop;
+  Frame frame = valid_frame<jp::EStop>(2);
+  ASSERT_EQ(receiver.decode(frame, stop), DecodeResult::kOk);
+  set_raw(frame, jp::Signal::kEStopEngage, 0);
+  EXPECT_EQ(receiver.decode(frame, stop), DecodeResult::kOutOfRange);
+  jp::ModeCommand command;
+  Frame mode = valid_frame<jp::ModeCommand>(2);
+  set_raw(mode, jp::Signal::kModeCommandRequestedMode, 0);
+  EXPECT_EQ(receiver.decode(mode, command), DecodeResult::kUnknownMode);
+  jp::BoardStatus status;
+  Frame board_mode = valid_frame<jp::BoardStatus>(2);
+  set_raw(board_mode, jp::Signal::kBoardStatusMode, 7);
+  EXPECT_EQ(receiver.decode(board_mode, status), DecodeResult::kUnknownMode);
+  EXPECT_EQ(receiver.rejects.total(), 3u);
+}
+
+TEST(JointProtocolRejects, OutOfRangeRawValues) {
+  jp::Receiver receiver{1};
+  const std::pair<jp::Signal, std::int64_t> cases[] = {
+      {jp::Signal::kTorqueReferenceTau0, 4001},  {jp::Signal::kTorqueReferenceTau3, -4001},
+      {jp::Signal::kTorqueGainsJoint, 4},        {jp::Signal::kTorqueGainsKp, 4001},
+      {jp::Signal::kTorqueGainsLoadVelocity, -4001},
+  };
+  for (const auto& [signal, raw] : cases) {
+    DecodeResult result{};
+    if (signal_spec(signal).frame == jp::FrameType::kTorqueReference) {
+      Frame frame = valid_frame<jp::TorqueReference>(1);
+      set_raw(frame, signal, raw);
+      jp::TorqueReference out;
+      result = receiver.decode(frame, out);
+    } else {
+      Frame frame = valid_frame<jp::TorqueGains>(1);
+      set_raw(frame, signal, raw);
+      jp::TorqueGains out;
+      result = receiver.decode(frame, out);
+    }
+    EXPECT_EQ(result, DecodeResult::kOutOfRange) << signal_spec(signal).name << " raw " << raw;
+  }
+  EXPECT_EQ(receiver.rejects.out_of_range, std::size(cases));
+}
+
+// Each joint slot is its own frame type with its own counter sequence.
+TEST(JointProtocolCounters, EachJointSlotHasItsOwnSequence) {
+  jp::Receiver receiver{0};
+  jp::JointSensor<0> zero;
+  jp::JointSensor<1> one;
+  EXPECT_EQ(receiver.decode(valid_frame<jp::JointSensor<0>>(0, 5), zero), DecodeResult::kOk);
+  EXPECT_EQ(receiver.decode(valid_frame<jp::JointSensor<1>>(0, 5), one), DecodeResult::kOk);
+  EXPECT_EQ(receiver.decode(valid_frame<jp::JointSensor<0>>(0, 5), zero),
+            DecodeResult::kStaleCounter);
+  // A frame of slot 1 is not slot 0's.
+  EXPECT_EQ(receiver.decode(valid_frame<jp::JointSensor<1>>(0, 6), zero), DecodeResult::kWrongId);
+}
+
+// The joint protocol's bus budget, per bus at 1 Mbit/s, worst-case stuffing: 2 boards of 4
+// joints and the IMU (the humanoid's 8 leg joints). Counted by hand for the robot bus at 6 ms:
+// per board a TorqueReference, 4 JointState and ValveCommands per period, ModeCommand every
+// 10 ms, BoardStatus every 20 ms, EncoderOffset every 100 ms; the IMU's 3 frames per period.
+TEST(JointProtocolBusLoad, RobotBusAtSixMillisecondsIsWithinFortyPercent) {
+  const jp::BusLayout legs{2, 4, true, 6};
+  const double robot_frames_per_second =
+      2 * (6 * 1000.0 / 6 + 100 + 50 + 10) + 3 * 1000.0 / 6;
+  EXPECT_NEAR(jp::bus_load(jp::Bus::kRobot, 1'000'000, legs),
+              robot_frames_per_second * 135 / 1e6, 1e-12);
+  // The I/O bus: per board 4 JointSensor, 2 ChamberPressures and ValveDrive every 1 ms, and
+  // one Sync for all.
+  EXPECT_NEAR(jp::bus_load(jp::Bus::kIo, 1'000'000, legs), (2 * 7 + 1) * 1000.0 * 135 / 1e6,
+              1e-12);
+  EXPECT_LE(jp::bus_load(jp::Bus::kRobot, 1'000'000, legs), 0.40);
+  // Fewer joints per board drop their frames.
+  const jp::BusLayout one_joint{1, 1, false, 6};
+  EXPECT_NEAR(jp::bus_load(jp::Bus::kRobot, 1'000'000, one_joint),
+              (3 * 1000.0 / 6 + 100 + 50 + 10) * 135 / 1e6, 1e-12);
 }
 
 }  // namespace

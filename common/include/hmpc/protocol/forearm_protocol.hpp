@@ -1,74 +1,60 @@
-// CAN protocol of the forearm actuator board: the one source of truth for frame ids, signal
-// layouts, scaling, units and ranges, and the codec that uses them.
-// common/protocol/hmpc_forearm.dbc describes the same frames for cantools or SavvyCAN;
-// tests/unit/dbc_test.cpp keeps it in agreement with kFrames and kSignals below.
+// CAN protocol of the forearm actuator board: the one source of truth for its frame ids, signal
+// layouts, scaling, units and ranges. The codec, the end-to-end protection (CRC-8 and rolling
+// counter in every frame) and the bit layout rules are codec.hpp's, shared with the other board
+// protocols. common/protocol/hmpc_forearm.dbc describes the same frames for cantools or
+// SavvyCAN; tests/unit/dbc_test.cpp keeps it in agreement with kFrames and kSignals below.
 //
-// Bus: classic CAN, 11-bit identifiers, every frame 8 data bytes.
-//
-// Identifiers: frame_id(type, node) = kBaseId + kNodeIdStride * node + FrameSpec::id_offset,
-// node 0..15. Node 0 is 0x100..0x108 and node 15 is 0x1F0..0x1F8, so 0x000..0x0FF stays free
-// for bus-wide frames that must win arbitration (an emergency stop, a time sync). Inside a
-// node the order of the offsets is the priority: heartbeat, then the 1 kHz I/O loop, then
-// the 250 Hz trajectory and telemetry, then gains.
-//
-// End-to-end protection, the same in every frame:
-//   byte 0       checksum: CRC-8/AUTOSAR (polynomial 0x2F, initial value 0xFF, final XOR 0xFF,
-//                not reflected; check value 0xDF for "123456789") over the identifier as two
-//                bytes, little-endian, then data bytes 1..7. Covering the identifier means a
-//                frame cannot be taken for another node's or another frame type's.
-//   byte 1 [3:0] rolling counter 0..15, one sequence per frame type and sender (Sender below).
-//                A receiver (CounterTracker) accepts the first counter it sees, then only
-//                advances of 1..7 modulo 16: 0 is a repeated frame, 8..15 is an old or
-//                reordered one. It must forget a frame type (CounterTracker::reset) when that
-//                frame times out, so a restarted sender is heard again.
-// Board->host frames carry the same protection, so the host can reject corrupt telemetry too.
-//
-// Signals are little-endian (Intel, DBC "@1"); start bits count from bit 0 of byte 0. Bits
-// no signal covers are sent as zero and ignored on receipt (the checksum still covers them).
-//
-// Physical values are float: every scaled signal has at most 16 bits, which float holds
-// exactly, and the same float arithmetic on the host, the HIL and a Cortex-M4 without a
-// double-precision FPU produces the same frames bit for bit.
-//
-// Nothing here allocates, throws, calls virtual functions or prints.
+// Identifiers: node 0..15 at base 0x100, stride 0x10. Node 0 is 0x100..0x109 and node 15 is
+// 0x1F0..0x1F9, so 0x000..0x0FF stays free for bus-wide frames that must win arbitration. Inside
+// a node the order of the offsets is the priority: heartbeat, then the 1 kHz I/O loop, then the
+// 250 Hz trajectory and telemetry, then gains.
 #pragma once
 
-#include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <limits>
-#include <string_view>
-#include <type_traits>
+
+#include "hmpc/protocol/codec.hpp"
 
 namespace hmpc::forearm_protocol {
 
+using protocol::ByteOrder;
+using protocol::DecodeResult;
+using protocol::EncodeResult;
+using protocol::Endpoint;
+using protocol::EnumValue;
+using protocol::Frame;
+using protocol::kChecksumByte;
+using protocol::kCounterModulo;
+using protocol::kMaxCounterAdvance;
+using protocol::kWorstCaseFrameBits;
+using protocol::NodeId;
+using protocol::RejectCounters;
+using protocol::SignalKind;
+using protocol::crc8_autosar;
+using protocol::decode;
+using protocol::encode;
+using protocol::frame_checksum;
+using protocol::frame_id;
+using protocol::frame_spec;
+using protocol::identify;
+using protocol::index_of;
+using protocol::raw_max;
+using protocol::raw_min;
+using protocol::raw_of;
+using protocol::signal_spec;
+using protocol::to_string;
+using protocol::value_name;
+using protocol::value_of;
+using protocol::values_of;
+namespace detail = protocol::detail;
+
+inline constexpr protocol::IdLayout kIds{0x100, 0x10, 15};
+inline constexpr NodeId kMaxNodeId = kIds.max_node;
+inline constexpr std::uint32_t kBaseId = kIds.base;
+inline constexpr std::uint32_t kNodeIdStride = kIds.node_stride;
+
 // ---------------------------------------------------------------------------------------
-// Frame, nodes, identifiers
-
-// A classic CAN data frame, independent of any operating system's CAN headers.
-struct Frame {
-  std::uint32_t id = 0;  // 11-bit standard identifier
-  std::uint8_t dlc = 0;  // data length code, 0..8
-  std::array<std::uint8_t, 8> data{};
-};
-
-using NodeId = std::uint8_t;
-inline constexpr NodeId kMaxNodeId = 15;
-inline constexpr std::uint32_t kBaseId = 0x100;
-inline constexpr std::uint32_t kNodeIdStride = 0x10;
-
-// The bus participants; the DBC's BU_ nodes.
-enum class Endpoint : std::uint8_t { kHost, kBoard, kPlant };
-
-constexpr const char* to_string(Endpoint endpoint) {
-  switch (endpoint) {
-    case Endpoint::kHost: return "HOST";
-    case Endpoint::kBoard: return "BOARD";
-    case Endpoint::kPlant: return "PLANT";
-  }
-  return "?";
-}
+// Frames
 
 enum class FrameType : std::uint8_t {
   kModeCommand,       // host -> board: heartbeat, requested mode and strategy
@@ -84,53 +70,23 @@ enum class FrameType : std::uint8_t {
 };
 inline constexpr std::size_t kFrameTypeCount = 10;
 
-struct FrameSpec {
-  FrameType type;
-  const char* name;        // DBC message name
-  std::uint8_t id_offset;  // added to the node's base id
-  std::uint8_t dlc;        // bytes
-  Endpoint sender;
-  Endpoint receiver;
-  std::uint16_t cycle_time_ms;  // nominal period; 0: sent when the value changes
-};
+using FrameSpec = protocol::FrameSpec<FrameType>;
 
 // clang-format off
 inline constexpr FrameSpec kFrames[kFrameTypeCount] = {
-  // type                          name                 offset dlc sender            receiver         period ms
-  {FrameType::kModeCommand,      "ModeCommand",      0x0, 8, Endpoint::kHost,  Endpoint::kBoard,  10},
-  {FrameType::kSensor,           "Sensor",           0x1, 8, Endpoint::kPlant, Endpoint::kBoard,   1},
-  {FrameType::kActuatorCommand,  "ActuatorCommand",  0x2, 8, Endpoint::kBoard, Endpoint::kPlant,   1},
-  {FrameType::kTrajectorySample, "TrajectorySample", 0x3, 8, Endpoint::kHost,  Endpoint::kBoard,   4},
-  {FrameType::kBoardStatus,      "BoardStatus",      0x4, 8, Endpoint::kBoard, Endpoint::kHost,   10},
-  {FrameType::kJointState,       "JointState",       0x5, 8, Endpoint::kBoard, Endpoint::kHost,    4},
-  {FrameType::kActuatorOutputs,  "ActuatorOutputs",  0x6, 8, Endpoint::kBoard, Endpoint::kHost,    4},
-  {FrameType::kSolveTelemetry,   "SolveTelemetry",   0x7, 8, Endpoint::kBoard, Endpoint::kHost,    4},
-  {FrameType::kGains,            "Gains",            0x8, 8, Endpoint::kHost,  Endpoint::kBoard,   0},
-  {FrameType::kSync,             "Sync",             0x9, 8, Endpoint::kPlant, Endpoint::kBoard,   1},
+  // type                          name                 offset dlc sender            receiver         period ms  bus-wide
+  {FrameType::kModeCommand,      "ModeCommand",      0x0, 8, Endpoint::kHost,  Endpoint::kBoard,  10, false},
+  {FrameType::kSensor,           "Sensor",           0x1, 8, Endpoint::kPlant, Endpoint::kBoard,   1, false},
+  {FrameType::kActuatorCommand,  "ActuatorCommand",  0x2, 8, Endpoint::kBoard, Endpoint::kPlant,   1, false},
+  {FrameType::kTrajectorySample, "TrajectorySample", 0x3, 8, Endpoint::kHost,  Endpoint::kBoard,   4, false},
+  {FrameType::kBoardStatus,      "BoardStatus",      0x4, 8, Endpoint::kBoard, Endpoint::kHost,   10, false},
+  {FrameType::kJointState,       "JointState",       0x5, 8, Endpoint::kBoard, Endpoint::kHost,    4, false},
+  {FrameType::kActuatorOutputs,  "ActuatorOutputs",  0x6, 8, Endpoint::kBoard, Endpoint::kHost,    4, false},
+  {FrameType::kSolveTelemetry,   "SolveTelemetry",   0x7, 8, Endpoint::kBoard, Endpoint::kHost,    4, false},
+  {FrameType::kGains,            "Gains",            0x8, 8, Endpoint::kHost,  Endpoint::kBoard,   0, false},
+  {FrameType::kSync,             "Sync",             0x9, 8, Endpoint::kPlant, Endpoint::kBoard,   1, false},
 };
 // clang-format on
-
-constexpr std::size_t index_of(FrameType type) { return static_cast<std::size_t>(type); }
-constexpr const FrameSpec& frame_spec(FrameType type) { return kFrames[index_of(type)]; }
-
-// Precondition: node <= kMaxNodeId.
-constexpr std::uint32_t frame_id(FrameType type, NodeId node) {
-  return kBaseId + kNodeIdStride * node + frame_spec(type).id_offset;
-}
-
-// The frame type and node an identifier belongs to; false for identifiers of no frame here.
-constexpr bool identify(std::uint32_t id, FrameType& type, NodeId& node) {
-  if (id < kBaseId || id >= kBaseId + kNodeIdStride * (kMaxNodeId + 1)) return false;
-  const std::uint32_t offset = (id - kBaseId) % kNodeIdStride;
-  for (const FrameSpec& spec : kFrames) {
-    if (spec.id_offset == offset) {
-      type = spec.type;
-      node = static_cast<NodeId>((id - kBaseId) / kNodeIdStride);
-      return true;
-    }
-  }
-  return false;
-}
 
 // ---------------------------------------------------------------------------------------
 // Enumerated signal values
@@ -174,11 +130,6 @@ inline constexpr std::uint8_t kJointLimit = 1u << 6;        // theta beyond the 
 inline constexpr std::uint8_t kInternal = 1u << 7;          // failed self-check (stack, config)
 }  // namespace fault
 
-struct EnumValue {
-  std::uint32_t value;
-  const char* name;  // DBC VAL_ description
-};
-
 inline constexpr EnumValue kRequestedModeValues[] = {{1, "idle"}, {2, "hold"}, {3, "run"}};
 inline constexpr EnumValue kBoardModeValues[] = {
     {0, "boot"}, {1, "idle"}, {2, "hold"}, {3, "run"}, {4, "fault"}};
@@ -189,50 +140,10 @@ inline constexpr EnumValue kSolveStatusValues[] = {
     {0, "converged"},     {1, "iteration_cap"},     {2, "budget_exhausted"}, {3, "stalled"},
     {4, "invalid_input"}, {5, "numerical_failure"}, {6, "no_solve"}};
 
-// The DBC's name of an enumerated signal value (BoardMode, Strategy, ...), or "?".
-template <std::size_t N>
-constexpr const char* value_name(const EnumValue (&values)[N], std::uint32_t value) {
-  for (const auto& v : values)
-    if (v.value == value) return v.name;
-  return "?";
-}
-
-// The value of an enumerated signal by its DBC name (as the programs' command lines take them);
-// false for an unknown name.
-template <std::size_t N>
-constexpr bool value_of(const EnumValue (&values)[N], std::string_view name, std::uint32_t& out) {
-  for (const auto& v : values) {
-    if (name == v.name) {
-      out = v.value;
-      return true;
-    }
-  }
-  return false;
-}
-
-struct EnumValueList {
-  const EnumValue* values = nullptr;
-  std::uint8_t count = 0;
-};
-
-template <std::size_t N>
-constexpr EnumValueList values_of(const EnumValue (&values)[N]) {
-  return {values, static_cast<std::uint8_t>(N)};
-}
 
 // ---------------------------------------------------------------------------------------
 // Signals
 
-enum class SignalKind : std::uint8_t {
-  kChecksum,     // CRC-8 of the frame, computed by the codec
-  kCounter,      // rolling counter 0..15
-  kPhysical,     // scaled quantity: physical = raw * factor + offset, a float field
-  kInteger,      // unscaled count, time or bit set, an unsigned integer field
-  kMode,         // RequestedMode or BoardMode; other values decode as kUnknownMode
-  kEnumeration,  // another enumeration; other values decode as kUnknownEnum
-};
-
-enum class ByteOrder : std::uint8_t { kLittleEndian };  // DBC "@1"; the only one used
 
 // clang-format off
 enum class Signal : std::uint8_t {
@@ -258,22 +169,8 @@ enum class Signal : std::uint8_t {
 // clang-format on
 inline constexpr std::size_t kSignalCount = 55;
 
-struct SignalSpec {
-  Signal signal;
-  FrameType frame;
-  const char* name;  // DBC signal name, unique within its frame
-  std::uint8_t start_bit;
-  std::uint8_t length;  // bits
-  ByteOrder byte_order;
-  bool is_signed;  // two's complement
-  double factor;
-  double offset;
-  double min;  // physical range; both ends lie on the raw grid
-  double max;
-  const char* unit;
-  SignalKind kind;
-  EnumValueList values;  // kMode and kEnumeration only
-};
+using SignalSpec = protocol::SignalSpec<Signal, FrameType>;
+
 
 // Resolution is the factor. Ranges: theta [-pi, pi] rad (to the next grid step), theta_dot
 // [-20, 20] rad/s, P [0, 0.8] MPa, v_p [0, 5] V, v_m [-5, 5] V (the thesis's input limits,
@@ -351,22 +248,6 @@ inline constexpr SignalSpec kSignals[kSignalCount] = {
   {Signal::kSyncTick,                        FrameType::kSync,             "tick",             32, 32, ByteOrder::kLittleEndian, false, 1,       0, 0,       4294967295, "ms",        SignalKind::kInteger,     {}},
 };
 // clang-format on
-
-constexpr std::size_t index_of(Signal signal) { return static_cast<std::size_t>(signal); }
-constexpr const SignalSpec& signal_spec(Signal signal) { return kSignals[index_of(signal)]; }
-
-// Half away from zero. Not std::lround, which is not constexpr; the one number it rounds
-// otherwise (0.5 less an ulp, which + 0.5 carries to 1) is immaterial at a signal's resolution.
-constexpr std::int64_t round_half_away(double x) {
-  // NOLINTNEXTLINE(bugprone-incorrect-roundings)
-  return x < 0 ? -static_cast<std::int64_t>(-x + 0.5) : static_cast<std::int64_t>(x + 0.5);
-}
-// Raw value of a physical value that lies on the signal's grid.
-constexpr std::int64_t raw_of(const SignalSpec& spec, double physical) {
-  return round_half_away((physical - spec.offset) / spec.factor);
-}
-constexpr std::int64_t raw_min(const SignalSpec& spec) { return raw_of(spec, spec.min); }
-constexpr std::int64_t raw_max(const SignalSpec& spec) { return raw_of(spec, spec.max); }
 
 // ---------------------------------------------------------------------------------------
 // Messages: one plain struct per frame. visit() names the signal of every field; the codec,
@@ -540,554 +421,32 @@ struct Sync {
   }
 };
 
-// ---------------------------------------------------------------------------------------
-// Results
-
-enum class EncodeResult : std::uint8_t {
-  kOk,
-  kInvalidNode,  // node id above kMaxNodeId
-  kNotFinite,    // a physical value is NaN or infinite
-  kOutOfRange,   // a value outside its signal's [min, max], or a counter above 15
-  kUnknownMode,  // a mode value with no meaning in this frame
-  kUnknownEnum,  // a strategy or solve status value with no meaning
-};
-
-// Decoded values come from integers, so they are always finite: kNotFinite is encode-only.
-enum class DecodeResult : std::uint8_t {
-  kOk,
-  kWrongId,       // not this frame type of this node
-  kWrongLength,   // DLC is not the frame's
-  kBadChecksum,   // CRC-8 mismatch: corrupt frame
-  kStaleCounter,  // rolling counter repeated or gone backwards
-  kOutOfRange,    // a raw value outside its signal's range
-  kUnknownMode,   // a mode value with no meaning in this frame
-  kUnknownEnum,   // a strategy or solve status value with no meaning
-};
-
-constexpr const char* to_string(EncodeResult result) {
-  switch (result) {
-    case EncodeResult::kOk: return "ok";
-    case EncodeResult::kInvalidNode: return "invalid-node";
-    case EncodeResult::kNotFinite: return "not-finite";
-    case EncodeResult::kOutOfRange: return "out-of-range";
-    case EncodeResult::kUnknownMode: return "unknown-mode";
-    case EncodeResult::kUnknownEnum: return "unknown-enum";
-  }
-  return "?";
-}
-
-constexpr const char* to_string(DecodeResult result) {
-  switch (result) {
-    case DecodeResult::kOk: return "ok";
-    case DecodeResult::kWrongId: return "wrong-id";
-    case DecodeResult::kWrongLength: return "wrong-length";
-    case DecodeResult::kBadChecksum: return "bad-checksum";
-    case DecodeResult::kStaleCounter: return "stale-counter";
-    case DecodeResult::kOutOfRange: return "out-of-range";
-    case DecodeResult::kUnknownMode: return "unknown-mode";
-    case DecodeResult::kUnknownEnum: return "unknown-enum";
-  }
-  return "?";
-}
 
 // ---------------------------------------------------------------------------------------
-// Checksum
+// The description the codec reads, and the codec over it
 
-inline constexpr std::size_t kChecksumByte = 0;
-
-constexpr std::uint8_t crc8_autosar_update(std::uint8_t crc, std::uint8_t byte) {
-  crc = static_cast<std::uint8_t>(crc ^ byte);
-  for (int bit = 0; bit < 8; ++bit) {
-    const unsigned shifted = static_cast<unsigned>(crc) << 1;
-    crc = static_cast<std::uint8_t>((crc & 0x80u) ? shifted ^ 0x2Fu : shifted);
-  }
-  return crc;
-}
-
-constexpr std::uint8_t crc8_autosar(const std::uint8_t* bytes, std::size_t count) {
-  std::uint8_t crc = 0xFF;
-  for (std::size_t i = 0; i < count; ++i) crc = crc8_autosar_update(crc, bytes[i]);
-  return static_cast<std::uint8_t>(crc ^ 0xFFu);
-}
-
-// The checksum a frame must carry in byte kChecksumByte (over its id and the other bytes).
-constexpr std::uint8_t frame_checksum(const Frame& frame) {
-  std::uint8_t crc = 0xFF;
-  crc = crc8_autosar_update(crc, static_cast<std::uint8_t>(frame.id & 0xFFu));
-  crc = crc8_autosar_update(crc, static_cast<std::uint8_t>((frame.id >> 8) & 0xFFu));
-  for (std::size_t i = 0; i < frame.data.size(); ++i) {
-    if (i != kChecksumByte) crc = crc8_autosar_update(crc, frame.data[i]);
-  }
-  return static_cast<std::uint8_t>(crc ^ 0xFFu);
-}
-
-// ---------------------------------------------------------------------------------------
-// Codec internals
-
-namespace detail {
-
-constexpr std::uint64_t low_bits(unsigned length) {
-  return length >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << length) - 1;
-}
-
-constexpr std::uint64_t bits_of(const SignalSpec& spec) {
-  return low_bits(spec.length) << spec.start_bit;
-}
-
-// The table in the form the codec uses at run time: float scaling, so no double arithmetic
-// reaches a single-precision FPU.
-struct CodecSpec {
-  std::uint8_t start_bit = 0;
-  std::uint8_t length = 0;
-  bool is_signed = false;
-  SignalKind kind = SignalKind::kInteger;
-  float factor = 1;
-  float offset = 0;
-  float min = 0;
-  float max = 0;
-  std::int64_t raw_min = 0;
-  std::int64_t raw_max = 0;
-  EnumValueList values;
+struct Description {
+  using FrameType = forearm_protocol::FrameType;
+  using Signal = forearm_protocol::Signal;
+  static constexpr const protocol::IdLayout& kIds = forearm_protocol::kIds;
+  static constexpr const auto& kFrames = forearm_protocol::kFrames;
+  static constexpr const auto& kSignals = forearm_protocol::kSignals;
 };
+constexpr Description protocol_of(FrameType) { return {}; }
+constexpr Description protocol_of(Signal) { return {}; }
 
-constexpr std::array<CodecSpec, kSignalCount> make_codec_specs() {
-  std::array<CodecSpec, kSignalCount> specs{};
-  for (std::size_t i = 0; i < kSignalCount; ++i) {
-    const SignalSpec& s = kSignals[i];
-    specs[i] = CodecSpec{s.start_bit,
-                         s.length,
-                         s.is_signed,
-                         s.kind,
-                         static_cast<float>(s.factor),
-                         static_cast<float>(s.offset),
-                         static_cast<float>(s.min),
-                         static_cast<float>(s.max),
-                         raw_min(s),
-                         raw_max(s),
-                         s.values};
-  }
-  return specs;
-}
-inline constexpr std::array<CodecSpec, kSignalCount> kCodecSpecs = make_codec_specs();
+using Messages = protocol::MessageList<ModeCommand, SensorSample, ActuatorCommand, TrajectorySample,
+                                       BoardStatus, JointState, ActuatorOutputs, SolveTelemetry,
+                                       Gains, Sync>;
+static_assert(protocol::is_well_formed<Description>(Messages{}),
+              "tables or messages break a rule of codec.hpp (see its compile-time checks)");
 
-constexpr std::uint64_t payload_of(const Frame& frame) {
-  std::uint64_t payload = 0;
-  for (std::size_t i = 0; i < frame.data.size(); ++i) {
-    payload |= static_cast<std::uint64_t>(frame.data[i]) << (8 * i);
-  }
-  return payload;
-}
-
-constexpr std::int64_t extract_raw(std::uint64_t payload, const CodecSpec& spec) {
-  const std::uint64_t bits = (payload >> spec.start_bit) & low_bits(spec.length);
-  const bool negative = spec.is_signed && ((bits >> (spec.length - 1)) & 1u);
-  return negative ? static_cast<std::int64_t>(bits) -
-                        static_cast<std::int64_t>(std::uint64_t{1} << spec.length)
-                  : static_cast<std::int64_t>(bits);
-}
-
-constexpr void insert_raw(std::uint64_t& payload, const CodecSpec& spec, std::int64_t raw) {
-  payload |= (static_cast<std::uint64_t>(raw) & low_bits(spec.length)) << spec.start_bit;
-}
-
-enum class Violation : std::uint8_t { kNone, kOutOfRange, kUnknownMode, kUnknownEnum };
-
-constexpr Violation check_integer(const CodecSpec& spec, std::int64_t raw) {
-  if (spec.kind == SignalKind::kMode || spec.kind == SignalKind::kEnumeration) {
-    for (std::uint8_t i = 0; i < spec.values.count; ++i) {
-      if (static_cast<std::int64_t>(spec.values.values[i].value) == raw) return Violation::kNone;
-    }
-    return spec.kind == SignalKind::kMode ? Violation::kUnknownMode : Violation::kUnknownEnum;
-  }
-  return raw < spec.raw_min || raw > spec.raw_max ? Violation::kOutOfRange : Violation::kNone;
-}
-
-constexpr EncodeResult to_encode_result(Violation violation) {
-  switch (violation) {
-    case Violation::kNone: return EncodeResult::kOk;
-    case Violation::kOutOfRange: return EncodeResult::kOutOfRange;
-    case Violation::kUnknownMode: return EncodeResult::kUnknownMode;
-    case Violation::kUnknownEnum: return EncodeResult::kUnknownEnum;
-  }
-  return EncodeResult::kOutOfRange;
-}
-
-constexpr DecodeResult to_decode_result(Violation violation) {
-  switch (violation) {
-    case Violation::kNone: return DecodeResult::kOk;
-    case Violation::kOutOfRange: return DecodeResult::kOutOfRange;
-    case Violation::kUnknownMode: return DecodeResult::kUnknownMode;
-    case Violation::kUnknownEnum: return DecodeResult::kUnknownEnum;
-  }
-  return DecodeResult::kOutOfRange;
-}
-
-template <class T>
-constexpr std::int64_t integer_value(T value) {
-  if constexpr (std::is_enum_v<T>) {
-    return static_cast<std::int64_t>(static_cast<std::underlying_type_t<T>>(value));
-  } else {
-    return static_cast<std::int64_t>(value);
-  }
-}
-
-// Rounds half away from zero; the caller has bounded x to the signal's raw range, which
-// has at most 24 bits for physical signals, so int32 holds it.
-// round_half_away's rounding in float, for the encoder on a single-precision board.
-inline std::int32_t round_float(float x) {
-  // NOLINTNEXTLINE(bugprone-incorrect-roundings)
-  return x < 0 ? -static_cast<std::int32_t>(-x + 0.5f) : static_cast<std::int32_t>(x + 0.5f);
-}
-
-struct SignalWriter {
-  std::uint64_t payload = 0;
-  EncodeResult result = EncodeResult::kOk;
-
-  void operator()(Signal signal, float value) {
-    if (result != EncodeResult::kOk) return;
-    const CodecSpec& spec = kCodecSpecs[index_of(signal)];
-    if (!std::isfinite(value)) {
-      result = EncodeResult::kNotFinite;
-      return;
-    }
-    if (value < spec.min || value > spec.max) {
-      result = EncodeResult::kOutOfRange;
-      return;
-    }
-    std::int64_t raw = round_float((value - spec.offset) / spec.factor);
-    // Float rounding next to a range end must not step off the raw range.
-    raw = raw < spec.raw_min ? spec.raw_min : raw > spec.raw_max ? spec.raw_max : raw;
-    insert_raw(payload, spec, raw);
-  }
-
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  void operator()(Signal signal, T value) {
-    if (result != EncodeResult::kOk) return;
-    const CodecSpec& spec = kCodecSpecs[index_of(signal)];
-    const std::int64_t raw = integer_value(value);
-    result = to_encode_result(check_integer(spec, raw));
-    if (result == EncodeResult::kOk) insert_raw(payload, spec, raw);
-  }
-};
-
-struct SignalReader {
-  std::uint64_t payload = 0;
-  DecodeResult result = DecodeResult::kOk;
-
-  void operator()(Signal signal, float& value) {
-    if (result != DecodeResult::kOk) return;
-    const CodecSpec& spec = kCodecSpecs[index_of(signal)];
-    const std::int64_t raw = extract_raw(payload, spec);
-    if (raw < spec.raw_min || raw > spec.raw_max) {
-      result = DecodeResult::kOutOfRange;
-      return;
-    }
-    const float physical = static_cast<float>(raw) * spec.factor + spec.offset;
-    // Float rounding at a range end must not step outside [min, max] either.
-    value = physical < spec.min ? spec.min : physical > spec.max ? spec.max : physical;
-  }
-
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  void operator()(Signal signal, T& value) {
-    if (result != DecodeResult::kOk) return;
-    const CodecSpec& spec = kCodecSpecs[index_of(signal)];
-    const std::int64_t raw = extract_raw(payload, spec);
-    result = to_decode_result(check_integer(spec, raw));
-    if (result == DecodeResult::kOk) value = static_cast<T>(raw);
-  }
-};
-
-// ---------------------------------------------------------------------------------------
-// Compile-time checks of the table and of every message's visit().
-
-constexpr bool signals_are_indexed() {
-  for (std::size_t i = 0; i < kSignalCount; ++i) {
-    if (index_of(kSignals[i].signal) != i) return false;
-  }
-  return true;
-}
-
-constexpr bool frames_are_indexed_with_distinct_offsets() {
-  for (std::size_t i = 0; i < kFrameTypeCount; ++i) {
-    if (index_of(kFrames[i].type) != i || kFrames[i].id_offset >= kNodeIdStride) return false;
-    if (kFrames[i].dlc != 8) return false;
-    for (std::size_t j = 0; j < i; ++j) {
-      if (kFrames[j].id_offset == kFrames[i].id_offset) return false;
-    }
-  }
-  return true;
-}
-
-constexpr double magnitude(double x) { return x < 0 ? -x : x; }
-
-constexpr bool on_grid(const SignalSpec& s, double physical) {
-  const double back = static_cast<double>(raw_of(s, physical)) * s.factor + s.offset;
-  return magnitude(back - physical) <= 1e-9 * (magnitude(physical) > 1 ? magnitude(physical) : 1);
-}
-
-constexpr bool signal_is_well_formed(const SignalSpec& s) {
-  if (s.byte_order != ByteOrder::kLittleEndian) return false;
-  if (s.length < 1 || s.length > 32 || s.start_bit + s.length > 8 * frame_spec(s.frame).dlc) {
-    return false;
-  }
-  if (!(s.factor > 0) || s.min > s.max || !on_grid(s, s.min) || !on_grid(s, s.max)) return false;
-  const std::int64_t lowest = s.is_signed ? -(std::int64_t{1} << (s.length - 1)) : 0;
-  const std::int64_t highest =
-      s.is_signed ? (std::int64_t{1} << (s.length - 1)) - 1 : (std::int64_t{1} << s.length) - 1;
-  if (raw_min(s) < lowest || raw_max(s) > highest) return false;
-  const bool integer_kind = s.kind != SignalKind::kPhysical;
-  // Integer kinds are unscaled and unsigned; physical ones fit a float mantissa exactly.
-  if (integer_kind && (s.is_signed || s.factor != 1 || s.offset != 0)) return false;
-  if (!integer_kind && s.length > 24) return false;
-  const bool enumerated = s.kind == SignalKind::kMode || s.kind == SignalKind::kEnumeration;
-  if (enumerated != (s.values.count > 0)) return false;
-  for (std::uint8_t i = 0; i < s.values.count; ++i) {
-    const double v = s.values.values[i].value;
-    if (v < s.min || v > s.max) return false;
-  }
-  if (s.kind == SignalKind::kChecksum) {
-    return s.start_bit == 8 * kChecksumByte && s.length == 8;
-  }
-  if (s.kind == SignalKind::kCounter) return s.length == 4 && s.min == 0 && s.max == 15;
-  return true;
-}
-
-constexpr bool signals_are_well_formed() {
-  for (const SignalSpec& s : kSignals) {
-    if (!signal_is_well_formed(s)) return false;
-  }
-  return true;
-}
-
-// Per frame: no two signals share a bit, one checksum, one counter.
-constexpr bool frames_are_well_formed() {
-  for (const FrameSpec& frame : kFrames) {
-    std::uint64_t used = 0;
-    int checksums = 0;
-    int counters = 0;
-    for (const SignalSpec& s : kSignals) {
-      if (s.frame != frame.type) continue;
-      if (used & bits_of(s)) return false;
-      used |= bits_of(s);
-      checksums += s.kind == SignalKind::kChecksum;
-      counters += s.kind == SignalKind::kCounter;
-    }
-    if (checksums != 1 || counters != 1) return false;
-  }
-  return true;
-}
-
-// Signals a message's visit() must name: all of its frame's but the checksum.
-constexpr std::uint64_t visited_signals_of(FrameType type) {
-  std::uint64_t mask = 0;
-  for (const SignalSpec& s : kSignals) {
-    if (s.frame == type && s.kind != SignalKind::kChecksum) {
-      mask |= std::uint64_t{1} << index_of(s.signal);
-    }
-  }
-  return mask;
-}
-
-// Records what visit() names and whether each field's type suits its signal.
-struct VisitAudit {
-  std::uint64_t visited = 0;
-  bool consistent = true;
-
-  constexpr void note(Signal signal) {
-    const std::uint64_t bit = std::uint64_t{1} << index_of(signal);
-    if (visited & bit) consistent = false;
-    visited |= bit;
-  }
-  constexpr void operator()(Signal signal, float&) {
-    note(signal);
-    if (signal_spec(signal).kind != SignalKind::kPhysical) consistent = false;
-  }
-  template <class T, std::enable_if_t<!std::is_floating_point_v<T>, int> = 0>
-  constexpr void operator()(Signal signal, T&) {
-    note(signal);
-    const SignalSpec& s = signal_spec(signal);
-    using Stored = typename std::conditional_t<std::is_enum_v<T>, std::underlying_type<T>,
-                                               std::common_type<T>>::type;
-    if (s.kind == SignalKind::kPhysical || s.kind == SignalKind::kChecksum) consistent = false;
-    if (static_cast<double>(std::numeric_limits<Stored>::max()) < s.max) consistent = false;
-  }
-};
-
-template <class Message>
-constexpr bool visits_exactly_its_signals() {
-  Message message{};
-  VisitAudit audit{};
-  Message::visit(message, audit);
-  return audit.consistent && audit.visited == visited_signals_of(Message::kType);
-}
-
-}  // namespace detail
-
-static_assert(kSignalCount <= 64, "visit audits keep one bit per signal");
-static_assert(detail::signals_are_indexed(), "kSignals[i].signal must be Signal(i)");
-static_assert(detail::frames_are_indexed_with_distinct_offsets(),
-              "kFrames[i].type must be FrameType(i), offsets distinct and below the stride");
-static_assert(detail::signals_are_well_formed(), "a signal does not fit its frame or range");
-static_assert(detail::frames_are_well_formed(), "signals overlap, or checksum/counter missing");
-static_assert(kBaseId + kNodeIdStride * (kMaxNodeId + 1) <= 0x800, "11-bit identifiers");
-static_assert(detail::visits_exactly_its_signals<ModeCommand>());
-static_assert(detail::visits_exactly_its_signals<SensorSample>());
-static_assert(detail::visits_exactly_its_signals<ActuatorCommand>());
-static_assert(detail::visits_exactly_its_signals<TrajectorySample>());
-static_assert(detail::visits_exactly_its_signals<BoardStatus>());
-static_assert(detail::visits_exactly_its_signals<JointState>());
-static_assert(detail::visits_exactly_its_signals<ActuatorOutputs>());
-static_assert(detail::visits_exactly_its_signals<SolveTelemetry>());
-static_assert(detail::visits_exactly_its_signals<Gains>());
-static_assert(detail::visits_exactly_its_signals<Sync>());
-
-// ---------------------------------------------------------------------------------------
-// Codec
-
-// Encodes msg for node into out, counter included, checksum computed. On any error out is
-// left untouched.
-template <class Message>
-EncodeResult encode(const Message& msg, NodeId node, Frame& out) {
-  static_assert(detail::visits_exactly_its_signals<Message>(), "not a message of this protocol");
-  if (node > kMaxNodeId) return EncodeResult::kInvalidNode;
-  detail::SignalWriter writer;
-  Message::visit(msg, writer);
-  if (writer.result != EncodeResult::kOk) return writer.result;
-  Frame frame;
-  frame.id = frame_id(Message::kType, node);
-  frame.dlc = frame_spec(Message::kType).dlc;
-  for (std::size_t i = 0; i < frame.data.size(); ++i) {
-    frame.data[i] = static_cast<std::uint8_t>(writer.payload >> (8 * i));
-  }
-  frame.data[kChecksumByte] = frame_checksum(frame);
-  out = frame;
-  return EncodeResult::kOk;
-}
-
-// Checks id, length, checksum and every signal's range; on kOk fills out (counter included,
-// not checked against earlier frames: that is Receiver's job), otherwise leaves it untouched.
-template <class Message>
-DecodeResult decode(const Frame& frame, NodeId node, Message& out) {
-  static_assert(detail::visits_exactly_its_signals<Message>(), "not a message of this protocol");
-  if (node > kMaxNodeId || frame.id != frame_id(Message::kType, node)) {
-    return DecodeResult::kWrongId;
-  }
-  if (frame.dlc != frame_spec(Message::kType).dlc) return DecodeResult::kWrongLength;
-  if (frame.data[kChecksumByte] != frame_checksum(frame)) return DecodeResult::kBadChecksum;
-  detail::SignalReader reader{detail::payload_of(frame)};
-  Message decoded{};
-  Message::visit(decoded, reader);
-  if (reader.result == DecodeResult::kOk) out = decoded;
-  return reader.result;
-}
-
-// ---------------------------------------------------------------------------------------
-// Rolling counters and reject counting
-
-inline constexpr std::uint8_t kCounterModulo = 16;
-inline constexpr std::uint8_t kMaxCounterAdvance = 7;  // up to 6 lost frames in a row
-
-// Validates the rolling counter of each frame type from one sender.
-class CounterTracker {
- public:
-  // kOk (and remembers counter) for the first frame of a type or an advance of
-  // 1..kMaxCounterAdvance; kStaleCounter for a repeat or a step back.
-  constexpr DecodeResult accept(FrameType type, std::uint8_t counter) {
-    const std::size_t i = index_of(type);
-    const std::uint16_t bit = static_cast<std::uint16_t>(1u << i);
-    if (synced_ & bit) {
-      const unsigned advance = (unsigned{counter} + kCounterModulo - last_[i]) % kCounterModulo;
-      if (advance == 0 || advance > kMaxCounterAdvance) return DecodeResult::kStaleCounter;
-    }
-    synced_ = static_cast<std::uint16_t>(synced_ | bit);
-    last_[i] = counter;
-    return DecodeResult::kOk;
-  }
-  constexpr void reset(FrameType type) {
-    synced_ = static_cast<std::uint16_t>(synced_ & ~(1u << index_of(type)));
-  }
-  constexpr void reset_all() { synced_ = 0; }
-
- private:
-  std::array<std::uint8_t, kFrameTypeCount> last_{};
-  std::uint16_t synced_ = 0;  // bit i: a counter of FrameType(i) has been accepted
-};
-
-struct RejectCounters {
-  std::uint32_t wrong_id = 0;
-  std::uint32_t wrong_length = 0;
-  std::uint32_t bad_checksum = 0;
-  std::uint32_t stale_counter = 0;
-  std::uint32_t out_of_range = 0;
-  std::uint32_t unknown_mode = 0;
-  std::uint32_t unknown_enum = 0;
-
-  constexpr void count(DecodeResult result) {
-    switch (result) {
-      case DecodeResult::kOk: break;
-      case DecodeResult::kWrongId: ++wrong_id; break;
-      case DecodeResult::kWrongLength: ++wrong_length; break;
-      case DecodeResult::kBadChecksum: ++bad_checksum; break;
-      case DecodeResult::kStaleCounter: ++stale_counter; break;
-      case DecodeResult::kOutOfRange: ++out_of_range; break;
-      case DecodeResult::kUnknownMode: ++unknown_mode; break;
-      case DecodeResult::kUnknownEnum: ++unknown_enum; break;
-    }
-  }
-  constexpr std::uint32_t total() const {
-    return wrong_id + wrong_length + bad_checksum + stale_counter + out_of_range + unknown_mode +
-           unknown_enum;
-  }
-};
-
-// One node's inbound frames from one sender: decodes, checks the rolling counter, counts
-// rejects. A rejected frame leaves the tracker where it was. Call decode only with frames
-// meant for this node (see identify); others count as kWrongId.
-struct Receiver {
-  NodeId node = 0;
-  CounterTracker counters;
-  RejectCounters rejects;
-
-  constexpr Receiver() = default;
-  constexpr explicit Receiver(NodeId node_id) : node(node_id) {}
-
-  template <class Message>
-  DecodeResult decode(const Frame& frame, Message& out) {
-    Message candidate{};
-    DecodeResult result = forearm_protocol::decode(frame, node, candidate);
-    if (result == DecodeResult::kOk) result = counters.accept(Message::kType, candidate.counter);
-    if (result == DecodeResult::kOk) out = candidate;
-    rejects.count(result);
-    return result;
-  }
-};
-
-// Stamps each frame type's rolling counter; it advances only when a frame was encoded.
-struct Sender {
-  NodeId node = 0;
-  std::array<std::uint8_t, kFrameTypeCount> next_counter{};
-
-  constexpr Sender() = default;
-  constexpr explicit Sender(NodeId node_id) : node(node_id) {}
-
-  template <class Message>
-  EncodeResult encode(Message msg, Frame& out) {
-    std::uint8_t& counter = next_counter[index_of(Message::kType)];
-    msg.counter = counter;
-    const EncodeResult result = forearm_protocol::encode(msg, node, out);
-    if (result == EncodeResult::kOk) {
-      counter = static_cast<std::uint8_t>((counter + 1) % kCounterModulo);
-    }
-    return result;
-  }
-};
+using CounterTracker = protocol::CounterTracker<Description>;
+using Receiver = protocol::Receiver<Description>;
+using Sender = protocol::Sender<Description>;
 
 // ---------------------------------------------------------------------------------------
 // Bus load
-
-// Worst-case bits of a classic data frame with an 11-bit id and 8 data bytes, interframe
-// space included: 111 bits plus at most 24 stuff bits (8n + 47 + floor((34 + 8n - 1) / 4)).
-inline constexpr std::uint32_t kWorstCaseFrameBits = 135;
 
 enum class Setup : std::uint8_t {
   kRobot,  // host and boards; sensors wired to the board, no plant frames on the bus
@@ -1100,7 +459,7 @@ constexpr double bus_load(Setup setup, std::uint32_t bitrate_bps, unsigned board
   for (const FrameSpec& frame : kFrames) {
     const bool plant_frame = frame.sender == Endpoint::kPlant || frame.receiver == Endpoint::kPlant;
     if (frame.cycle_time_ms == 0 || (plant_frame && setup == Setup::kRobot)) continue;
-    bits_per_second += kWorstCaseFrameBits * 1000.0 / frame.cycle_time_ms;
+    bits_per_second += protocol::frame_bits_per_second(1, frame.cycle_time_ms);
   }
   return bits_per_second * boards / bitrate_bps;
 }
