@@ -1,19 +1,16 @@
-// The forearm actuator board's application: state machine, host watchdog, scheduler and CAN
-// handlers around the two-stage MPC and the hold PID, independent of the board it runs on.
-// Board support (firmware/boards/*) feeds it received frames and sensor readings, calls tick()
-// at 1 kHz and run_mpc() when mpc_due(), applies outputs() and transmits what pop_frame()
-// yields.
+// The forearm actuator board's application on the board runtime (board_runtime.hpp: modes,
+// watchdogs, host clock, outbox): the two-stage MPC in run, the hold PID, the forearm's frames,
+// independent of the board it runs on. Board support (firmware/boards/*) feeds it received
+// frames and sensor readings, calls tick() at 1 kHz and run_mpc() when mpc_due(), applies
+// outputs() and transmits what pop_frame() yields.
 //
-//   boot --self-check--> idle --hold cmd--> hold (PID, load-velocity feedback)
-//   idle or hold --run cmd--> run (MPC)        any --idle cmd--> idle
+//   hold: PID with load-velocity feedback on the angle, around the gravity feedforward
+//   run: the MPC strategy the host selects (thesis Table 3.1)
 //   run --hold cmd, or repeated failed/overrun MPC steps--> hold (run then refused until the
 //   kSolverFallback bit is cleared by an idle command with clear_faults)
-//   any --heartbeat or sensor timeout, joint limit--> fault (safe outputs, latched)
-//   fault --idle cmd with clear_faults--> idle
+//   hold or run --joint beyond its software limit--> fault
 //
-// Time is counted in 1 kHz ticks, so the same code runs paced by a timer (real time) or by
-// the plant's sensor frames (lock-step HIL) with identical behaviour. Only the solver
-// deadline reads a wall clock, and only when one is given.
+// Only the solver deadline reads a wall clock, and only when one is given.
 //
 // Nothing here allocates; the object holds every strategy's workspace (~60 kB for double):
 // give it static storage.
@@ -23,6 +20,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "board_runtime.hpp"
 #include "hmpc/control/load_velocity_feedback_pid.hpp"
 #include "hmpc/models/forearm_mpc.hpp"
 #include "hmpc/mpc/compute_model.hpp"
@@ -42,6 +40,18 @@ static_assert(int(proto::SolveStatusCode::kConverged) == int(SolveStatus::kConve
                   int(proto::SolveStatusCode::kNumericalFailure) ==
                       int(SolveStatus::kNumericalFailure),
               "protocol solve status codes must match hmpc::SolveStatus");
+
+// The forearm protocol as the board runtime uses it.
+struct ForearmBoardProtocol {
+  using Description = proto::Description;
+  using ModeCommand = proto::ModeCommand;
+  using Sync = proto::Sync;
+  using BoardMode = proto::BoardMode;
+  using RequestedMode = proto::RequestedMode;
+  using FaultBits = std::uint8_t;
+  static constexpr FaultBits kHeartbeatTimeoutFault = proto::fault::kHeartbeatTimeout;
+  static constexpr FaultBits kSensorTimeoutFault = proto::fault::kSensorTimeout;
+};
 
 template <typename Scalar>
 struct BoardConfig {
@@ -111,7 +121,10 @@ struct Outputs {
 };
 
 template <typename Scalar>
-class ForearmBoard {
+class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProtocol> {
+  using Runtime = BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProtocol>;
+  friend Runtime;
+
  public:
   using Config = BoardConfig<Scalar>;
   using Strategies = forearm::Strategies<Scalar>;
@@ -130,8 +143,9 @@ class ForearmBoard {
   ForearmBoard& operator=(const ForearmBoard&) = delete;
 
   explicit ForearmBoard(const Config& config, WallClock clock = nullptr)
-      : config_(config), clock_(clock), receiver_(config.node), sender_(config.node),
-        fine4_(Strategies::fine4(setup())), fine8_(Strategies::fine8(setup())),
+      : Runtime(RuntimeConfig{config.node, config.heartbeat_timeout_ticks,
+                              config.sensor_timeout_ticks}),
+        config_(config), clock_(clock), fine4_(Strategies::fine4(setup())), fine8_(Strategies::fine8(setup())),
         coarse20_(Strategies::coarse20(setup())), coarse40_(Strategies::coarse40(setup())),
         two_stage_(Strategies::two_stage(setup())), pam_only_(Strategies::pam_only(setup())) {
     target_.set_constant(Scalar(0));
@@ -139,43 +153,8 @@ class ForearmBoard {
 
   // ---- inputs ------------------------------------------------------------------------
 
-  // Any frame from the bus. Frames for other nodes are ignored; ours are validated (id,
-  // length, checksum, counter, range) and counted when rejected, never acted on.
-  void on_frame(const proto::Frame& frame) {
-    proto::FrameType type;
-    proto::NodeId node;
-    if (!proto::identify(frame.id, type, node) || node != config_.node) return;
-    switch (type) {
-      case proto::FrameType::kModeCommand: {
-        proto::ModeCommand m;
-        if (receiver_.decode(frame, m) == proto::DecodeResult::kOk) on_mode_command(m);
-        break;
-      }
-      case proto::FrameType::kSensor: {
-        proto::SensorSample s;
-        if (receiver_.decode(frame, s) == proto::DecodeResult::kOk)
-          on_measurement(s.theta, s.theta_dot, s.pressure);
-        break;
-      }
-      case proto::FrameType::kTrajectorySample: {
-        proto::TrajectorySample s;
-        if (receiver_.decode(frame, s) == proto::DecodeResult::kOk) on_trajectory_sample(s);
-        break;
-      }
-      case proto::FrameType::kGains: {
-        proto::Gains g;
-        if (receiver_.decode(frame, g) == proto::DecodeResult::kOk) on_gains(g);
-        break;
-      }
-      case proto::FrameType::kSync: {  // the board support ticks on it in lock-step
-        proto::Sync s;
-        if (receiver_.decode(frame, s) == proto::DecodeResult::kOk) ++counters_.syncs;
-        break;
-      }
-      default:  // frames this board sends, not receives
-        break;
-    }
-  }
+  using Runtime::on_frame;
+  using Runtime::tick;
 
   // A sensor reading (from the bus in HIL, from the board's own ADC/encoder on hardware).
   // Pressure in MPa as on the bus; the model works in bar.
@@ -183,29 +162,10 @@ class ForearmBoard {
     if (!std::isfinite(theta) || !std::isfinite(theta_dot) || !std::isfinite(pressure_mpa))
       return;  // never acted on; the sensor watchdog notices the silence
     x_ << Scalar(theta), Scalar(theta_dot), Scalar(10) * Scalar(pressure_mpa);
-    last_sensor_tick_ = ticks_;
-    have_sensor_ = true;
+    this->note_sensor();
   }
 
   // ---- scheduling --------------------------------------------------------------------
-
-  // The 1 kHz step: watchdogs, mode logic, the hold controller, outputs and telemetry.
-  void tick() {
-    ++ticks_;
-    if (mode_ == proto::BoardMode::kBoot) mode_ = proto::BoardMode::kIdle;  // self-check: config
-    check_watchdogs();
-    if (solve_pending_ && ticks_ >= plan_ready_tick_) {
-      plan_ = pending_plan_;
-      solve_pending_ = false;
-    }
-    switch (mode_) {
-      case proto::BoardMode::kHold: hold_step(); break;
-      case proto::BoardMode::kRun: apply_plan(); break;
-      default: outputs_ = {config_.safe_v_p, config_.safe_v_m}; break;
-    }
-    mpc_due_ = mode_ == proto::BoardMode::kRun && ticks_ % kTicksPerMpcStep == 0 && !solve_pending_;
-    send_telemetry();
-  }
 
   bool mpc_due() const { return mpc_due_; }
 
@@ -214,7 +174,7 @@ class ForearmBoard {
   // and falls back to hold after repeated bad steps.
   void run_mpc() {
     mpc_due_ = false;
-    if (mode_ != proto::BoardMode::kRun) return;
+    if (this->mode() != proto::BoardMode::kRun) return;
     const double start = clock_ ? clock_() : 0.0;
     const double deadline = start + config_.mpc_budget_s;
     const auto stop = [this, deadline] { return clock_ && clock_() > deadline; };
@@ -239,7 +199,7 @@ class ForearmBoard {
       last_iterations_ = mpc.last_iterations();
       record_layers(mpc, status);
     });
-    if (config_.solver_failure_from_tick != 0 && ticks_ >= config_.solver_failure_from_tick) {
+    if (config_.solver_failure_from_tick != 0 && this->ticks() >= config_.solver_failure_from_tick) {
       usable_ = false;
       status = SolveStatus::kNumericalFailure;
       plan = plan_;
@@ -254,7 +214,7 @@ class ForearmBoard {
       // Ready after the charged time, at the first tick not earlier; within one tick it is
       // as soon as on a real board, whose solve runs between ticks.
       const double ticks_late = std::ceil(elapsed / double(kTick));
-      plan_ready_tick_ = ticks_ + std::uint32_t(ticks_late < 1.0 ? 1.0 : ticks_late);
+      plan_ready_tick_ = this->ticks() + std::uint32_t(ticks_late < 1.0 ? 1.0 : ticks_late);
       pending_plan_ = plan;
       solve_pending_ = true;
     } else {
@@ -271,42 +231,32 @@ class ForearmBoard {
         static_cast<std::uint16_t>(elapsed * 1e6 < 65535.0 ? elapsed * 1e6 : 65535.0);
     if (consecutive_bad_steps_ >= config_.max_consecutive_bad_steps) {
       ++counters_.fallbacks;
-      faults_ |= proto::fault::kSolverFallback;
+      this->set_fault_bits(proto::fault::kSolverFallback);
       enter_hold();
+      this->set_mode(proto::BoardMode::kHold);
     }
   }
 
   // ---- outputs -----------------------------------------------------------------------
 
   const Outputs<Scalar>& outputs() const { return outputs_; }
-  bool pop_frame(proto::Frame& out) {
-    if (outbox_count_ == 0) return false;
-    out = outbox_[outbox_head_];
-    outbox_head_ = (outbox_head_ + 1) % kOutboxSize;
-    --outbox_count_;
-    return true;
-  }
-
-  proto::BoardMode mode() const { return mode_; }
-  std::uint8_t faults() const { return faults_; }
   proto::Strategy strategy() const { return strategy_; }
-  const BoardCounters& counters() const { return counters_; }
-  const proto::RejectCounters& rejects() const { return receiver_.rejects; }
-  std::uint32_t ticks() const { return ticks_; }
-  // Ticks since the last accepted heartbeat and sensor reading: what the watchdogs compare
-  // with their timeouts (logged, so a trip's latency can be read off the log).
-  std::uint32_t heartbeat_age() const { return ticks_ - last_heartbeat_tick_; }
-  std::uint32_t sensor_age() const { return ticks_ - last_sensor_tick_; }
+  BoardCounters counters() const {
+    BoardCounters c = counters_;
+    const RuntimeCounters& r = this->runtime_counters();
+    c.watchdog_trips = r.watchdog_trips;
+    c.sensor_timeouts = r.sensor_timeouts;
+    c.refused_commands = r.refused_commands;
+    c.syncs = r.syncs;
+    return c;
+  }
   const Config& config() const { return config_; }
-  std::uint32_t dropped_frames() const { return dropped_frames_; }
   // The last MPC step, as an MPC reports it (for telemetry and compute accounting).
   int last_iterations() const { return last_iterations_; }
   bool last_plan_usable() const { return usable_; }
   LayerWork last_work() const { return last_work_; }
 
  private:
-  static constexpr int kOutboxSize = 16;
-
   typename Strategies::Setup setup() const {
     typename Strategies::Setup s;
     s.parameters = config_.model;
@@ -346,63 +296,69 @@ class ForearmBoard {
     return static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
   }
 
-  bool sensor_fresh() const {
-    return have_sensor_ &&
-           ticks_ - last_sensor_tick_ <= std::uint32_t(config_.sensor_timeout_ticks);
-  }
+  // The host's trajectory clock now, s.
+  Scalar host_time() const { return Scalar(this->host_time_us()) * Scalar(1e-6); }
 
-  // The host's trajectory clock now: board ticks plus the offset between the clocks.
-  Scalar host_time() const {
-    return Scalar(std::uint32_t(1000u * ticks_ + host_offset_us_)) * Scalar(1e-6);
-  }
+  // ---- runtime hooks -------------------------------------------------------------------
 
-  // Each heartbeat measures host time - board time, short by the heartbeat's latency, which
-  // jitters (by a tick or two in lock-step, more on a busy bus). The offset follows the
-  // largest measurement (the shortest latency) and falls back only beyond a deadband, so the
-  // target time does not jitter with the latency, yet a host clock that drifts or restarts is
-  // followed. Arithmetic modulo 2^32 us, as the host clock on the bus.
-  void track_host_clock(std::uint32_t host_time_us) {
-    constexpr std::int32_t kDeadbandUs = 3000;  // > the arrival jitter, < a control step
-    const std::uint32_t measured = host_time_us - 1000u * ticks_;
-    const std::int32_t change = std::int32_t(measured - host_offset_us_);
-    if (!have_host_offset_ || change > 0 || change < -kDeadbandUs) host_offset_us_ = measured;
-    have_host_offset_ = true;
-  }
-
-  void on_mode_command(const proto::ModeCommand& m) {
-    last_heartbeat_tick_ = ticks_;
-    track_host_clock(m.host_time_us);
-    if (mode_ == proto::BoardMode::kFault) {
-      if (m.mode == proto::RequestedMode::kIdle && m.clear_faults && sensor_fresh()) {
-        faults_ = 0;
-        mode_ = proto::BoardMode::kIdle;
-      } else if (m.mode != proto::RequestedMode::kIdle) {
-        ++counters_.refused_commands;
+  void on_application_frame(proto::FrameType type, const proto::Frame& frame) {
+    switch (type) {
+      case proto::FrameType::kSensor: {
+        proto::SensorSample s;
+        if (this->receive(frame, s)) on_measurement(s.theta, s.theta_dot, s.pressure);
+        break;
       }
-      return;
-    }
-    switch (m.mode) {
-      case proto::RequestedMode::kIdle:
-        if (m.clear_faults) faults_ = 0;
-        mode_ = proto::BoardMode::kIdle;
+      case proto::FrameType::kTrajectorySample: {
+        proto::TrajectorySample s;
+        if (this->receive(frame, s)) on_trajectory_sample(s);
         break;
-      case proto::RequestedMode::kHold:
-        if (mode_ == proto::BoardMode::kHold) break;
-        if (!sensor_fresh()) {
-          ++counters_.refused_commands;
-          break;
-        }
-        enter_hold();
+      }
+      case proto::FrameType::kGains: {
+        proto::Gains g;
+        if (this->receive(frame, g)) on_gains(g);
         break;
-      case proto::RequestedMode::kRun:
-        if (!sensor_fresh() || (faults_ & proto::fault::kSolverFallback)) {
-          if (mode_ != proto::BoardMode::kRun) ++counters_.refused_commands;
-          break;
-        }
-        if (mode_ != proto::BoardMode::kRun || m.strategy != strategy_) enter_run(m.strategy);
+      }
+      default:  // frames this board sends, not receives
         break;
     }
   }
+
+  void on_heartbeat(const proto::ModeCommand&) {}
+  bool may_enter_hold() const { return true; }
+  bool may_enter_run(const proto::ModeCommand&) const {
+    return !(this->faults() & proto::fault::kSolverFallback);
+  }
+  bool run_request_changes(const proto::ModeCommand& m) const { return m.strategy != strategy_; }
+  void enter_run(const proto::ModeCommand& m) { enter_run(m.strategy); }
+
+  void control_step(proto::BoardMode mode) {
+    if (solve_pending_ && this->ticks() >= plan_ready_tick_) {
+      plan_ = pending_plan_;
+      solve_pending_ = false;
+    }
+    switch (mode) {
+      case proto::BoardMode::kHold: hold_step(); break;
+      case proto::BoardMode::kRun: apply_plan(); break;
+      default: apply_safe_outputs(); break;
+    }
+    mpc_due_ = mode == proto::BoardMode::kRun && this->ticks() % kTicksPerMpcStep == 0 &&
+               !solve_pending_;
+  }
+
+  void apply_safe_outputs() { outputs_ = {config_.safe_v_p, config_.safe_v_m}; }
+
+  void forget_sensor_counters() { this->forget_counter(proto::FrameType::kSensor); }
+
+  std::uint8_t application_faults() const {
+    const auto mode = this->mode();
+    const bool beyond = x_(0) < config_.theta_min || x_(0) > config_.theta_max;
+    return this->have_sensor() && beyond && mode != proto::BoardMode::kFault &&
+                   mode != proto::BoardMode::kIdle
+               ? proto::fault::kJointLimit
+               : std::uint8_t(0);
+  }
+
+  // ---- the forearm ---------------------------------------------------------------------
 
   void on_trajectory_sample(const proto::TrajectorySample& s) {
     target_.push_sample(Scalar(s.time_us) * Scalar(1e-6), Scalar(s.theta_d));
@@ -420,7 +376,6 @@ class ForearmBoard {
   void enter_hold() {
     hold_angle_ = x_(0);
     Pid::reset(pid_state_);
-    mode_ = proto::BoardMode::kHold;
   }
 
   // Entering run is cheap here (it may happen in a CAN handler); the strategy's offline
@@ -432,30 +387,6 @@ class ForearmBoard {
     if (target_.sample_count() == 0) target_.set_constant(x_(0));  // hold where it is
     plan_ = Control(Scalar(0), config_.model.k_vp * x_(2));
     solve_pending_ = false;
-    mode_ = proto::BoardMode::kRun;
-  }
-
-  void fault(std::uint8_t bit) {
-    faults_ |= bit;
-    mode_ = proto::BoardMode::kFault;
-    outputs_ = {config_.safe_v_p, config_.safe_v_m};
-  }
-
-  void check_watchdogs() {
-    const bool active = mode_ == proto::BoardMode::kHold || mode_ == proto::BoardMode::kRun;
-    if (active && ticks_ - last_heartbeat_tick_ > std::uint32_t(config_.heartbeat_timeout_ticks)) {
-      ++counters_.watchdog_trips;
-      receiver_.counters.reset(proto::FrameType::kModeCommand);
-      fault(proto::fault::kHeartbeatTimeout);
-    }
-    if (active && !sensor_fresh()) {
-      ++counters_.sensor_timeouts;
-      receiver_.counters.reset(proto::FrameType::kSensor);
-      fault(proto::fault::kSensorTimeout);
-    }
-    if (have_sensor_ && (x_(0) < config_.theta_min || x_(0) > config_.theta_max) &&
-        mode_ != proto::BoardMode::kFault && mode_ != proto::BoardMode::kIdle)
-      fault(proto::fault::kJointLimit);
   }
 
   // Hold: PID on theta with load-velocity feedback, around the gravity feedforward.
@@ -474,51 +405,39 @@ class ForearmBoard {
 
   static Scalar clamp(Scalar v, Scalar lo, Scalar hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
-  template <class Message>
-  void send(const Message& m) {
-    proto::Frame f;
-    if (sender_.encode(m, f) != proto::EncodeResult::kOk) return;
-    if (outbox_count_ == kOutboxSize) {  // the bus is not draining: drop the oldest
-      outbox_head_ = (outbox_head_ + 1) % kOutboxSize;
-      --outbox_count_;
-      ++dropped_frames_;
-    }
-    outbox_[(outbox_head_ + outbox_count_) % kOutboxSize] = f;
-    ++outbox_count_;
-  }
-
   void send_telemetry() {
+    const std::uint32_t ticks = this->ticks();
     // To the actuators (the plant, in HIL) every tick.
-    send(proto::ActuatorCommand{float(outputs_.v_p), float(outputs_.v_m), 0});
-    if (ticks_ % kTicksPerMpcStep == 0) {
+    this->send(proto::ActuatorCommand{float(outputs_.v_p), float(outputs_.v_m), 0});
+    if (ticks % kTicksPerMpcStep == 0) {
       const auto& p = config_.model;
-      send(proto::JointState{float(x_(0)), float(x_(1)), float(x_(2) / Scalar(10)), 0});
+      this->send(proto::JointState{float(x_(0)), float(x_(1)), float(x_(2) / Scalar(10)), 0});
       const Scalar tau_p = forearm::pam_torque(p, x_(2), x_(0)).tau;
-      send(proto::ActuatorOutputs{float(outputs_.v_p), float(outputs_.v_m),
+      this->send(proto::ActuatorOutputs{float(outputs_.v_p), float(outputs_.v_m),
                                   float(clamp(tau_p, Scalar(-30), Scalar(30))),
                                   float(p.motor_gain * outputs_.v_m), 0});
       telemetry_.tracking_error =
           float(clamp(target_.angle(host_time()) - x_(0), Scalar(-6.28), Scalar(6.28)));
-      if (mode_ != proto::BoardMode::kRun) telemetry_.status = proto::SolveStatusCode::kNoSolve;
-      send(telemetry_);
+      if (this->mode() != proto::BoardMode::kRun) {
+        telemetry_.status = proto::SolveStatusCode::kNoSolve;
+      }
+      this->send(telemetry_);
     }
-    if (ticks_ % 10 == 0) {
+    if (ticks % 10 == 0) {
       proto::BoardStatus s;
-      s.mode = mode_;
-      s.faults = faults_;
+      s.mode = this->mode();
+      s.faults = this->faults();
       s.strategy = strategy_;
-      s.rejected_frames = std::uint8_t(receiver_.rejects.total());
-      s.watchdog_trips = std::uint8_t(counters_.watchdog_trips);
+      s.rejected_frames = this->rejected_frames_mod_256();
+      s.watchdog_trips = std::uint8_t(this->runtime_counters().watchdog_trips);
       s.solver_failures = std::uint8_t(counters_.solver_failures);
       s.overruns = std::uint8_t(counters_.overruns);
-      send(s);
+      this->send(s);
     }
   }
 
   Config config_;
   WallClock clock_;
-  proto::Receiver receiver_;
-  proto::Sender sender_;
   forearm::TargetTrajectory<Scalar> target_;
   typename Strategies::Fine4 fine4_;
   typename Strategies::Fine8 fine8_;
@@ -527,17 +446,9 @@ class ForearmBoard {
   typename Strategies::TwoStage two_stage_;
   typename Strategies::PamOnly pam_only_;
 
-  proto::BoardMode mode_ = proto::BoardMode::kBoot;
   proto::Strategy strategy_ = proto::Strategy::kTwoStage;
-  std::uint8_t faults_ = 0;
-  BoardCounters counters_{};
+  BoardCounters counters_{};  // the application's; counters() adds the runtime's
   State x_ = State::Zero();
-  bool have_sensor_ = false;
-  std::uint32_t ticks_ = 0;
-  std::uint32_t last_sensor_tick_ = 0;
-  std::uint32_t last_heartbeat_tick_ = 0;
-  std::uint32_t host_offset_us_ = 0;  // host clock - board clock, us modulo 2^32
-  bool have_host_offset_ = false;
   Scalar hold_angle_ = 0;
   typename Pid::State pid_state_{};
   Control plan_ = Control::Zero();
@@ -552,10 +463,6 @@ class ForearmBoard {
   int consecutive_bad_steps_ = 0;
   proto::SolveTelemetry telemetry_{};
   Outputs<Scalar> outputs_{};
-  proto::Frame outbox_[kOutboxSize]{};
-  int outbox_head_ = 0;
-  int outbox_count_ = 0;
-  std::uint32_t dropped_frames_ = 0;
 };
 
 }  // namespace hmpc::firmware

@@ -322,7 +322,7 @@ inline constexpr SignalSpec kSignals[kSignalCount] = {
   {Signal::kTorqueGainsCounter,                  FrameType::kTorqueGains,           "counter",          8,  4, ByteOrder::kLittleEndian, false, 1,       0, 0,       15,         "",           SignalKind::kCounter,     {}},
   {Signal::kTorqueGainsJoint,                    FrameType::kTorqueGains,           "joint",           12,  4, ByteOrder::kLittleEndian, false, 1,       0, 0,       3,          "",           SignalKind::kInteger,     {}},
   {Signal::kTorqueGainsKp,                       FrameType::kTorqueGains,           "kp",              16, 12, ByteOrder::kLittleEndian, false, 0.00001, 0, 0,       0.04,       "1/(N.m)",    SignalKind::kPhysical,    {}},
-  {Signal::kTorqueGainsKi,                       FrameType::kTorqueGains,           "ki",              28, 12, ByteOrder::kLittleEndian, false, 0.0001,  0, 0,       0.4,        "1/(N.m.s)",  SignalKind::kPhysical,    {}},
+  {Signal::kTorqueGainsKi,                       FrameType::kTorqueGains,           "ki",              28, 12, ByteOrder::kLittleEndian, false, 0.0002,  0, 0,       0.8,        "1/(N.m.s)",  SignalKind::kPhysical,    {}},
   {Signal::kTorqueGainsLoadVelocity,             FrameType::kTorqueGains,           "k_lv",            40, 13, ByteOrder::kLittleEndian, true,  0.0001,  0, -0.4,    0.4,        "s/rad",      SignalKind::kPhysical,    {}},
 
   {Signal::kHoldGainsChecksum,                   FrameType::kHoldGains,             "checksum",         0,  8, ByteOrder::kLittleEndian, false, 1,       0, 0,       255,        "",           SignalKind::kChecksum,    {}},
