@@ -166,7 +166,8 @@ int main(int argc, char** argv) {
               host.values.size(), kRelativeTolerance);
 
   for (const auto& [method, text] : instructions) {
-    std::printf("instructions per MPC update on the target, %s:%s\n", method.c_str(), text.c_str());
+    std::printf("instructions per update (an MPC step, or a board's control period) on the target, %s:%s\n",
+                method.c_str(), text.c_str());
     std::istringstream fields(text);
     std::string label;
     double max = 0, median = 0;
@@ -183,10 +184,13 @@ int main(int argc, char** argv) {
   // runs it is left out.
   std::vector<Update> all;
   for (const auto& [method, list] : updates) all.insert(all.end(), list.begin(), list.end());
-  bool any_fast = false;
-  for (const Update& u : all) any_fast = any_fast || u.work.fast.rollout_steps > 0;
+  bool any_fast = false, any_work = false;
+  for (const Update& u : all) {
+    any_fast = any_fast || u.work.fast.rollout_steps > 0;
+    any_work = any_work || u.work.upper.rollout_steps > 0;
+  }
   const int columns = any_fast ? 4 : 3;
-  if (static_cast<int>(all.size()) >= columns) {
+  if (any_work && static_cast<int>(all.size()) >= columns) {  // no solver, no model to fit
     Eigen::MatrixXd A(all.size(), columns);
     Eigen::VectorXd b(all.size());
     for (size_t i = 0; i < all.size(); ++i) {

@@ -12,7 +12,7 @@
 #include <functional>
 #include <memory>
 
-#include "hmpc/models/hydraulic_joint.hpp"
+#include "hmpc/models/hydraulic_pendulum.hpp"
 #include "joint_board.hpp"
 
 namespace {
@@ -28,63 +28,19 @@ constexpr int kHeartbeatPeriodTicks = 10;  // the protocol's ModeCommand period
 // The plant's encoders read the joint angle plus a mounting offset that zeroing must find.
 constexpr double kMountingOffset = 0.3;
 
-// One joint: the actuator driving a link that hangs under gravity (3 kg at 0.2 m, 0.4 kg m^2
-// about the joint: a shank-sized load), theta = 0 hanging.
+// One joint: the actuator driving a shank-sized link that hangs under gravity
+// (models/hydraulic_pendulum.hpp), theta = 0 hanging.
 struct JointPlant {
-  static constexpr double kInertia = 0.4;
-  static constexpr double kGravityTorque = 3.0 * 9.81 * 0.2;
   hy::JointActuatorParameters<double> actuator{};
-  hy::JointActuatorState<double> state{};
-  double theta = 0, omega = 0;
+  hy::PendulumLoad<double> load = hy::PendulumLoad<double>::shank();
+  hy::PendulumState<double> x = hy::torque_free_rest(actuator);
   bool locked = false;  // the link clamped, as on a torque test stand
 
-  JointPlant() {
-    // At rest and torque-free: A_a p_a = A_b p_b, mid-range pressures.
-    state.pressure_b = 6e6;
-    state.pressure_a = state.pressure_b * actuator.area_b / actuator.area_a;
-  }
-  double torque() const { return hy::joint_torque(actuator, state, omega); }
-
-  struct Rate {
-    hy::JointActuatorState<double> actuator;
-    double theta, omega;
-  };
-  Rate rate(const hy::JointActuatorState<double>& s, double th, double om, double u) const {
-    const double tau = hy::joint_torque(actuator, s, om);
-    if (locked) return {hy::derivative(actuator, s, th, 0.0, u), 0.0, 0.0};
-    return {hy::derivative(actuator, s, th, om, u), om,
-            (tau - kGravityTorque * std::sin(th)) / kInertia};
-  }
-  void step(double u, double dt) {
-    constexpr int kSubsteps = 50;
-    const double h = dt / kSubsteps;
-    for (int i = 0; i < kSubsteps; ++i) {
-      const auto at = [&](const Rate* k, double f) {
-        hy::JointActuatorState<double> s = state;
-        if (k) {
-          s.spool += f * k->actuator.spool;
-          s.pressure_a += f * k->actuator.pressure_a;
-          s.pressure_b += f * k->actuator.pressure_b;
-        }
-        return s;
-      };
-      const Rate k1 = rate(state, theta, omega, u);
-      const Rate k2 = rate(at(&k1, h / 2), theta + h / 2 * k1.theta, omega + h / 2 * k1.omega, u);
-      const Rate k3 = rate(at(&k2, h / 2), theta + h / 2 * k2.theta, omega + h / 2 * k2.omega, u);
-      const Rate k4 = rate(at(&k3, h), theta + h * k3.theta, omega + h * k3.omega, u);
-      const auto mix = [h](double a, double b, double c, double d) {
-        return h / 6 * (a + 2 * b + 2 * c + d);
-      };
-      state.spool += mix(k1.actuator.spool, k2.actuator.spool, k3.actuator.spool,
-                         k4.actuator.spool);
-      state.pressure_a += mix(k1.actuator.pressure_a, k2.actuator.pressure_a,
-                              k3.actuator.pressure_a, k4.actuator.pressure_a);
-      state.pressure_b += mix(k1.actuator.pressure_b, k2.actuator.pressure_b,
-                              k3.actuator.pressure_b, k4.actuator.pressure_b);
-      theta += mix(k1.theta, k2.theta, k3.theta, k4.theta);
-      omega += mix(k1.omega, k2.omega, k3.omega, k4.omega);
-    }
-  }
+  double theta() const { return x.theta; }
+  double omega() const { return x.omega; }
+  double torque() const { return hy::joint_torque(actuator, x.actuator, x.omega); }
+  double gravity_torque(double theta) const { return load.gravity_torque(theta); }
+  void step(double u, double dt) { hy::step_pendulum(actuator, load, x, u, dt, 50, locked); }
 };
 
 struct StepOptions {
@@ -183,7 +139,7 @@ class Rig {
   void send_sensors() {
     for (std::size_t j = 0; j < joints_; ++j) {
       const JointPlant& p = plant_[j];
-      send_joint_sensor(j, float(p.theta + kMountingOffset), float(p.omega), float(p.torque()));
+      send_joint_sensor(j, float(p.theta() + kMountingOffset), float(p.omega()), float(p.torque()));
     }
     for (std::size_t first = 0; first < joints_; first += 2) {
       std::array<float, 2> p_a{}, p_b{};
@@ -191,8 +147,8 @@ class Rig {
       // floor: a joint locked in motion can swing a chamber below zero gauge).
       const auto sensor = [](double pascal) { return float(std::clamp(pascal * 1e-6, 0.0, 32.0)); };
       for (std::size_t i = 0; i < 2 && first + i < joints_; ++i) {
-        p_a[i] = sensor(plant_[first + i].state.pressure_a);
-        p_b[i] = sensor(plant_[first + i].state.pressure_b);
+        p_a[i] = sensor(plant_[first + i].x.actuator.pressure_a);
+        p_b[i] = sensor(plant_[first + i].x.actuator.pressure_b);
       }
       if (first == 0) {
         proto::ChamberPressures01 m;
@@ -268,7 +224,7 @@ Rig::Reference constant_torque(double tau) {
 // a host would from the boards' JointState frames).
 Rig::Reference host_holding_at(double angle) {
   return [angle](std::size_t, double, const JointPlant& p) {
-    return JointPlant::kGravityTorque * std::sin(p.theta) + 20 * (angle - p.theta) - 4 * p.omega;
+    return p.gravity_torque(p.theta()) + 20 * (angle - p.theta()) - 4 * p.omega();
   };
 }
 
@@ -310,7 +266,7 @@ TEST(JointBoard, ZeroingFindsTheMountingOffsetAndReportsIt) {
   EXPECT_TRUE(rig.board().zeroed());
   for (std::size_t j = 0; j < 2; ++j) {
     EXPECT_NEAR(rig.board().encoder_offset(j), kMountingOffset, 2e-4);  // the encoder's step
-    EXPECT_NEAR(rig.board().measurement(j).theta, rig.plant(j).theta, 2e-4);
+    EXPECT_NEAR(rig.board().measurement(j).theta, rig.plant(j).theta(), 2e-4);
   }
   EXPECT_TRUE(rig.last_offset_report().zeroed);
   EXPECT_NEAR(rig.last_offset_report().offset, kMountingOffset, 2e-4);
@@ -322,23 +278,23 @@ TEST(JointBoard, ZeroingFindsTheMountingOffsetAndReportsIt) {
 // seal friction, a few thousandths of critical); the hold PID's damping brings it to rest.
 TEST(JointBoard, HoldStopsAMovingLinkAndKeepsThePosture) {
   Rig rig;
-  rig.plant(1).theta = 0.2;
+  rig.plant(1).x.theta = 0.2;
   rig.stream(host_holding_at(0.4));
   rig.zero_and_enter(RequestedMode::kRun);
-  while (rig.plant(0).omega < 0.8 && rig.ticks() < 2000) rig.step();
+  while (rig.plant(0).omega() < 0.8 && rig.ticks() < 2000) rig.step();
   ASSERT_EQ(rig.board().mode(), BoardMode::kRun);
-  ASSERT_GE(rig.plant(0).omega, 0.8);
+  ASSERT_GE(rig.plant(0).omega(), 0.8);
   rig.stream(nullptr);
   rig.command(RequestedMode::kHold);
   rig.run(1);
   ASSERT_EQ(rig.board().mode(), BoardMode::kHold);
-  const double target_0 = rig.board().hold_target(0), start_1 = rig.plant(1).theta;
+  const double target_0 = rig.board().hold_target(0), start_1 = rig.plant(1).theta();
   rig.run(1500);
   EXPECT_EQ(rig.board().mode(), BoardMode::kHold);
-  EXPECT_LT(std::abs(rig.plant(0).omega), 0.01);
+  EXPECT_LT(std::abs(rig.plant(0).omega()), 0.01);
   // Within 5 mrad: up to 2.3 N·m of gravity on the 300 N·m/rad hold, the integral taking it.
   EXPECT_NEAR(rig.board().measurement(0).theta, target_0, 0.005);
-  EXPECT_NEAR(rig.plant(1).theta, start_1, 0.005);
+  EXPECT_NEAR(rig.plant(1).theta(), start_1, 0.005);
 }
 
 // On a clamped link the torque follows a 20 N·m reference step: after the rate limit's 60 ms
@@ -410,13 +366,13 @@ TEST(JointBoard, StaleReferenceHoldsThePostureThenRunResumes) {
   rig.zero_and_enter(RequestedMode::kRun);
   rig.run(1500);
   ASSERT_EQ(rig.board().mode(), BoardMode::kRun);
-  ASSERT_NEAR(rig.plant(0).theta, 0.4, 0.05);
+  ASSERT_NEAR(rig.plant(0).theta(), 0.4, 0.05);
   rig.run(30, {true, true, false});
   EXPECT_EQ(rig.board().mode(), BoardMode::kHold);
   EXPECT_TRUE(rig.board().faults() & proto::fault::kStaleReference);
   EXPECT_EQ(rig.board().counters().stale_references, 1u);
   const double held = rig.board().hold_target(0);
-  EXPECT_NEAR(held, rig.plant(0).theta, 0.02);
+  EXPECT_NEAR(held, rig.plant(0).theta(), 0.02);
   rig.run(1000, {true, true, false});
   EXPECT_EQ(rig.board().mode(), BoardMode::kHold);
   EXPECT_NEAR(rig.board().measurement(0).theta, held, 0.01);
@@ -476,7 +432,7 @@ TEST(JointBoard, SoftJointLimitAndPressureLimitFault) {
   rig.run(1500);
   EXPECT_EQ(rig.board().mode(), BoardMode::kFault);
   EXPECT_TRUE(rig.board().faults() & proto::fault::kJointLimit);
-  EXPECT_LT(rig.plant(0).theta, 0.3);  // stopped by the locked valves near the limit
+  EXPECT_LT(rig.plant(0).theta(), 0.3);  // stopped by the locked valves near the limit
 
   Board::Config low = Rig::config(1);
   low.joint[0].pressure_limit = 5e6;  // below the plant's 6 MPa rod-side pressure
