@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "firmware/boards/linux/options.hpp"
+#include "firmware/boards/linux/forearm_options.hpp"
 #include "hil/forearm/plant_node/options.hpp"
 
 namespace {
@@ -57,14 +57,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     namespace board = hmpc::linux_board;
     parse<board::Options>(
         "hmpc-forearm-board", words, board::parse_options, [](const board::Options& o) {
-          if (o.node > hmpc::forearm_protocol::kMaxNodeId) fail("board", "node out of range");
-          if (o.interface.empty() || o.interface.size() >= IFNAMSIZ)
+          if (o.board.node > hmpc::forearm_protocol::kMaxNodeId) {
+            fail("board", "node out of range");
+          }
+          if (o.board.interface.empty() || o.board.interface.size() >= IFNAMSIZ)
             fail("board", "bad interface name");
           if (o.w_v != 0 && !within(o.w_v, 1e-6, 1)) fail("board", "--w-v out of range");
-          if (o.duration_s != 0 && !within(o.duration_s, 1e-3, board::kMaxDurationS)) {
+          if (o.board.duration_s != 0 &&
+              !within(o.board.duration_s, 1e-3, board::kMaxDurationS)) {
             fail("board", "--duration out of range");
           }
-          if (o.emulate_cortex_m7 && !o.lockstep)
+          if (o.emulate_cortex_m7 && !o.board.lockstep)
             fail("board", "--emulate-target without --lockstep");
         });
   } else {

@@ -11,23 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "hmpc/protocol/forearm_protocol.hpp"
-
 namespace hmpc::linux_board {
 
-using forearm_protocol::value_name;
-
+// Rows and their CSV form are the application's (Support::Row, kCsvHeader, write_row).
+template <class Support>
 class TickLog {
  public:
-  struct Row {
-    std::uint32_t tick;
-    float wall_time_s;  // since the control loop started
-    forearm_protocol::BoardMode mode;
-    std::uint8_t faults;
-    forearm_protocol::Strategy strategy;
-    float v_p, v_m;                           // V, the outputs applied this tick
-    std::uint32_t heartbeat_age, sensor_age;  // ticks since the last accepted one
-  };
+  using Row = typename Support::Row;
 
   TickLog() = default;
   TickLog(const TickLog&) = delete;
@@ -60,20 +50,12 @@ class TickLog {
     return recorded_ > rows_.size() ? recorded_ - rows_.size() : 0;
   }
 
-  // Writes the kept rows, oldest first, and closes the file. Modes and strategies by their
-  // DBC names, so the CSV reads like a decoded bus trace.
+  // Writes the kept rows, oldest first, and closes the file.
   bool write_csv(std::string& error) {
     if (file_ == nullptr) return true;
-    std::fprintf(file_, "tick,wall_time_s,mode,faults,strategy,v_p,v_m,heartbeat_age,sensor_age\n");
+    std::fprintf(file_, "%s\n", Support::kCsvHeader);
     const std::uint64_t first = dropped_rows();
-    for (std::uint64_t i = first; i < recorded_; ++i) {
-      const Row& r = rows_[i % rows_.size()];
-      std::fprintf(file_, "%u,%.6f,%s,%u,%s,%.4f,%.4f,%u,%u\n", r.tick, double(r.wall_time_s),
-                   value_name(forearm_protocol::kBoardModeValues, std::uint32_t(r.mode)),
-                   unsigned(r.faults),
-                   value_name(forearm_protocol::kStrategyValues, std::uint32_t(r.strategy)),
-                   double(r.v_p), double(r.v_m), r.heartbeat_age, r.sensor_age);
-    }
+    for (std::uint64_t i = first; i < recorded_; ++i) Support::write_row(file_, rows_[i % rows_.size()]);
     const bool written = std::ferror(file_) == 0;
     const bool closed = std::fclose(file_) == 0;
     file_ = nullptr;

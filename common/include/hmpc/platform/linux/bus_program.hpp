@@ -1,5 +1,5 @@
-// Start-up and shutdown pieces shared by the Linux programs on the forearm's bus (the board,
-// the HIL plant node, the host controller): the clock, stop signals as a descriptor the loops
+// Start-up and shutdown pieces shared by the Linux programs on the boards' buses (the boards,
+// the HIL plant nodes, the host controllers): the clock, stop signals as a descriptor the loops
 // poll, one node's frames on a SocketCAN interface, CSV logs, and error text.
 #pragma once
 
@@ -46,13 +46,16 @@ inline int stop_signal_descriptor(std::string& error) {
   return fd;
 }
 
-// Opens `interface` for the frames of one node only (a busy bus then costs the kernel's
-// filter, not the program's loop); `error` names the interface and the reason on failure.
-inline bool open_node_bus(SocketCan& can, const std::string& interface,
-                          forearm_protocol::NodeId node, bool non_blocking, std::string& error) {
+// Opens `interface` for the frames of one node of protocol P only, and P's bus-wide ones (a
+// busy bus then costs the kernel's filter, not the program's loop); `error` names the interface
+// and the reason on failure.
+template <class P>
+bool open_node_bus(SocketCan& can, const std::string& interface, protocol::NodeId node,
+                   bool non_blocking, std::string& error) {
   CanResult opened = can.open(interface.c_str());
-  const CanFilter this_node = node_filter(node);
-  if (opened.ok()) opened = can.set_filters(&this_node, 1);
+  CanFilter filters[kMaxFilters];
+  const int count = node_filters<P>(node, filters);
+  if (opened.ok()) opened = can.set_filters(filters, std::size_t(count));
   if (opened.ok() && non_blocking) opened = can.set_non_blocking(true);
   if (!opened.ok()) error = "cannot open CAN interface '" + interface + "': " + describe(opened);
   return opened.ok();
