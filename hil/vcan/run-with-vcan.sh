@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # run-with-vcan.sh CMD [ARGS...]
 #
-# Runs CMD with the virtual CAN bus vcan0 up and exits with CMD's exit status.
+# Runs CMD with the virtual CAN buses vcan0 and vcan1 up and exits with CMD's exit status.
+# vcan0 is the robot's bus (host and boards); vcan1 the HIL's I/O bus, on which a plant node
+# emulates the boards' local sensors and valves where the robot bus must not carry them.
 #
-# Where this kernel has vcan (vcan0 is already up, or we are root and can create it), CMD runs
+# Where this kernel has vcan (both are already up, or we are root and can create them), CMD runs
 # right here. Otherwise it runs in a throw-away QEMU guest booting Debian's stock kernel, which
 # has CAN. The guest sees this machine's whole filesystem at the same paths (virtio-9p,
 # read-write) and runs CMD in the same directory, with the same environment and user id, so a
@@ -14,7 +16,7 @@
 # guest failed before CMD could report a status (a message on stderr says why).
 #
 # Environment:
-#   HMPC_VCAN_MODE        auto (default) | native | vm: force one way of getting vcan0
+#   HMPC_VCAN_MODE        auto (default) | native | vm: force one way of getting the buses
 #   HMPC_VCAN_TIMEOUT     seconds before CMD (with its guest) is killed; 0 = never (default)
 #   HMPC_VCAN_CACHE       where the guest kernel and initramfs are kept; delete it to move to
 #                         a newer Debian kernel (default ${XDG_CACHE_HOME:-~/.cache}/hmpc-vcan)
@@ -22,7 +24,7 @@
 #   HMPC_VCAN_ACCEL       auto (default) | kvm | tcg
 #   HMPC_VCAN_CPUS        guest CPUs (default 1)
 #   HMPC_VCAN_MEM         guest memory in MiB (default 512)
-#   HMPC_VCAN_VERBOSE     1: say how vcan0 was obtained, time the guest, show its kernel log
+#   HMPC_VCAN_VERBOSE     1: say how the buses were obtained, time the guest, show its kernel log
 #
 # The guest needs qemu-system-x86 and busybox-static; building its image once needs apt-get
 # (download only: nothing is installed, no root needed), dpkg-deb, kmod and xz-utils/zstd.
@@ -51,25 +53,35 @@ trap 'rm -rf "${temporary_dirs[@]}"' EXIT
 
 # ---------------------------------------------------------------------------------- native
 
-vcan0_is_up() {
+readonly buses=(vcan0 vcan1)
+
+vcan_is_up() {
   local type flags
-  type=$(cat /sys/class/net/vcan0/type 2>/dev/null) || return 1
-  flags=$(cat /sys/class/net/vcan0/flags 2>/dev/null) || return 1
+  type=$(cat "/sys/class/net/$1/type" 2>/dev/null) || return 1
+  flags=$(cat "/sys/class/net/$1/flags" 2>/dev/null) || return 1
   [ "$type" = 280 ] && (( flags & 0x1 ))  # ARPHRD_CAN, IFF_UP
 }
 
-bring_up_native_vcan0() {
+buses_are_up() {
+  local bus
+  for bus in "${buses[@]}"; do vcan_is_up "$bus" || return 1; done
+}
+
+bring_up_native_buses() {
   [ "$(id -u)" = 0 ] && command -v ip >/dev/null || return 1
   # vcan may be built in, or modprobe absent: only `ip` tells whether the kernel has it.
   modprobe vcan 2>/dev/null || true
-  # A concurrent launcher may create it between our check and our add: either way it exists.
-  ip link add dev vcan0 type vcan 2>/dev/null || [ -e /sys/class/net/vcan0 ] || return 1
-  ip link set vcan0 up 2>/dev/null && vcan0_is_up
+  local bus
+  for bus in "${buses[@]}"; do
+    # A concurrent launcher may create it between our check and our add: either way it exists.
+    ip link add dev "$bus" type vcan 2>/dev/null || [ -e "/sys/class/net/$bus" ] || return 1
+    ip link set "$bus" up 2>/dev/null && vcan_is_up "$bus" || return 1
+  done
 }
 
-# vcan0 is left up afterwards: other commands may be using it concurrently.
+# The buses are left up afterwards: other commands may be using them concurrently.
 run_natively() {
-  verbose "vcan0 is native; running $1 here"
+  verbose "vcan0 and vcan1 are native; running $1 here"
   (( timeout_s > 0 )) || exec "$@"
   local status=0
   timeout --kill-after=5 "$timeout_s" "$@" || status=$?
@@ -375,7 +387,9 @@ mount -t proc proc /host/proc && mount -t sysfs sysfs /host/sys &&
   mount -t devpts devpts /host/dev/pts && mount -t tmpfs tmpfs /host/dev/shm &&
   mount -t tmpfs tmpfs /host/run || give_up "cannot mount /proc, /sys, /dev or /run"
 ip link set lo up
-ip link add dev vcan0 type vcan && ip link set vcan0 up || give_up "cannot bring vcan0 up"
+for bus in vcan0 vcan1; do
+  ip link add dev $bus type vcan && ip link set $bus up || give_up "cannot bring $bus up"
+done
 # Raw mode: bytes pass unchanged (no \n -> \r\n).
 stty -F /dev/ttyS0 raw -echo && stty -F /dev/ttyS1 raw -echo
 # Through pipes, not straight to the serial ports: on a terminal, programs would colour and
@@ -396,10 +410,10 @@ EOF
 
 case $mode in
   auto)
-    if vcan0_is_up || bring_up_native_vcan0; then run_natively "$@"; else run_in_guest "$@"; fi ;;
+    if buses_are_up || bring_up_native_buses; then run_natively "$@"; else run_in_guest "$@"; fi ;;
   native)
-    vcan0_is_up || bring_up_native_vcan0 ||
-      fail "HMPC_VCAN_MODE=native but vcan0 is not up and cannot be created here (needs root and a kernel with vcan)"
+    buses_are_up || bring_up_native_buses ||
+      fail "HMPC_VCAN_MODE=native but vcan0 and vcan1 are not up and cannot be created here (needs root and a kernel with vcan)"
     run_natively "$@" ;;
   vm) run_in_guest "$@" ;;
   *) fail "HMPC_VCAN_MODE must be auto, native or vm, got '$mode'" ;;

@@ -46,19 +46,7 @@ inline constexpr long kTickNs = 1'000'000;
 // Frames taken from the socket per wake-up: a flooded bus must not starve the tick.
 inline constexpr int kMaxFramesPerDrain = 64;
 
-class FileDescriptor {
- public:
-  explicit FileDescriptor(int fd) : fd_(fd) {}
-  ~FileDescriptor() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FileDescriptor(const FileDescriptor&) = delete;
-  FileDescriptor& operator=(const FileDescriptor&) = delete;
-  int get() const { return fd_; }
-
- private:
-  int fd_;
-};
+using hmpc::platform::FileDescriptor;
 
 enum class StopReason { kSignal, kDuration, kBusError, kSystemError };
 
@@ -92,9 +80,16 @@ class BoardLoop {
   using Description = typename Support::Description;
   using SafeMessage = typename Support::SafeMessage;
 
-  BoardLoop(Board& board, protocol::NodeId node, const SafeMessage& safe, SocketCan& can,
-            TickLog<Support>& log)
-      : board_(board), can_(can), node_(node), safe_(safe), log_(log), safe_sender_(node) {}
+  // `io`: the HIL's I/O bus, where the frames to and from the plant go; nullptr when they
+  // share the robot bus (the forearm's HIL) or there is no plant (a robot).
+  BoardLoop(Board& board, protocol::NodeId node, const SafeMessage& safe, SocketCan& robot,
+            SocketCan* io, TickLog<Support>& log)
+      : board_(board), robot_(robot), io_(io), node_(node), safe_(safe), log_(log),
+        safe_sender_(node) {}
+
+  // The sockets to listen on: the robot bus, and the I/O bus if it is another.
+  int bus_count() const { return io_ ? 2 : 1; }
+  SocketCan& bus(int i) { return i == 0 ? robot_ : *io_; }
 
   // Passes a received frame to the board. True when it was a Sync the board accepted: in
   // lock-step, the plant's cue for one tick.
@@ -123,7 +118,7 @@ class BoardLoop {
     protocol::Frame frame;
     if (safe_sender_.encode(safe_, frame) != protocol::EncodeResult::kOk) return false;
     for (int attempt = 0; attempt < 100; ++attempt) {
-      const CanResult result = can_.send(to_can_frame(frame));
+      const CanResult result = bus_for(frame).send(to_can_frame(frame));
       if (result.ok()) return true;
       if (result.status != CanStatus::kWouldBlock &&
           result.status != CanStatus::kTransmitQueueFull) {
@@ -137,8 +132,19 @@ class BoardLoop {
   LoopStats& stats() { return stats_; }
 
  private:
+  // Frames to or from the plant go on the I/O bus when there is one.
+  SocketCan& bus_for(const protocol::Frame& frame) {
+    typename Description::FrameType type{};
+    protocol::NodeId node = 0;
+    if (io_ == nullptr || !protocol::identify(frame.id, type, node)) return robot_;
+    const auto& spec = protocol::frame_spec(type);
+    const bool plant = spec.sender == protocol::Endpoint::kPlant ||
+                       spec.receiver == protocol::Endpoint::kPlant;
+    return plant ? *io_ : robot_;
+  }
+
   void transmit(const protocol::Frame& frame) {
-    if (!can_.send(to_can_frame(frame)).ok()) {
+    if (!bus_for(frame).send(to_can_frame(frame)).ok()) {
       ++stats_.transmit_failures;  // lost, counted; the next tick sends fresh values
       return;
     }
@@ -150,7 +156,8 @@ class BoardLoop {
   }
 
   Board& board_;
-  SocketCan& can_;
+  SocketCan& robot_;
+  SocketCan* io_;
   protocol::NodeId node_;
   SafeMessage safe_;
   TickLog<Support>& log_;
@@ -183,9 +190,11 @@ bool drain(SocketCan& can, Loop& loop, OnFrame&& on_frame, LoopFailure& failure)
 
 // Lock-step: each valid Sync is one tick; the application's work runs after its tick.
 template <class Support>
-StopReason run_lockstep(typename Support::Board& board, BoardLoop<Support>& loop, SocketCan& can,
-                        int signal_fd, double start_s, double duration_s, LoopFailure& failure) {
-  pollfd fds[2] = {{can.native_handle(), POLLIN, 0}, {signal_fd, POLLIN, 0}};
+StopReason run_lockstep(typename Support::Board& board, BoardLoop<Support>& loop, int signal_fd,
+                        double start_s, double duration_s, LoopFailure& failure) {
+  const int buses = loop.bus_count();
+  pollfd fds[3] = {{signal_fd, POLLIN, 0}, {loop.bus(0).native_handle(), POLLIN, 0}, {}};
+  if (buses == 2) fds[2] = {loop.bus(1).native_handle(), POLLIN, 0};
   for (;;) {
     int timeout_ms = -1;
     if (duration_s > 0) {
@@ -193,28 +202,30 @@ StopReason run_lockstep(typename Support::Board& board, BoardLoop<Support>& loop
       if (left <= 0) return StopReason::kDuration;
       timeout_ms = int(std::ceil(left * 1e3));
     }
-    if (::poll(fds, 2, timeout_ms) < 0) {
+    if (::poll(fds, nfds_t(1 + buses), timeout_ms) < 0) {
       if (errno == EINTR) continue;
       return failure.system_error("poll");
     }
-    if (fds[1].revents & POLLIN) return StopReason::kSignal;
-    if (fds[0].revents == 0) continue;
-    const bool ok = drain(
-        can, loop,
-        [&](bool sync_accepted) {
-          if (sync_accepted && loop.tick(monotonic_seconds() - start_s)) {
-            Support::run_work(board);
-          }
-        },
-        failure);
-    if (!ok) return StopReason::kBusError;
+    if (fds[0].revents & POLLIN) return StopReason::kSignal;
+    for (int i = 0; i < buses; ++i) {
+      if (fds[1 + i].revents == 0) continue;
+      const bool ok = drain(
+          loop.bus(i), loop,
+          [&](bool sync_accepted) {
+            if (sync_accepted && loop.tick(monotonic_seconds() - start_s)) {
+              Support::run_work(board);
+            }
+          },
+          failure);
+      if (!ok) return StopReason::kBusError;
+    }
   }
 }
 
 // Real time: a 1 kHz CLOCK_MONOTONIC timer ticks the board (see the top of this file).
 template <class Support>
-StopReason run_real_time(typename Support::Board& board, BoardLoop<Support>& loop, SocketCan& can,
-                         int signal_fd, double start_s, double duration_s, LoopFailure& failure) {
+StopReason run_real_time(typename Support::Board& board, BoardLoop<Support>& loop, int signal_fd,
+                         double start_s, double duration_s, LoopFailure& failure) {
   const FileDescriptor timer(::timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC));
   if (timer.get() < 0) return failure.system_error("timerfd_create");
   const itimerspec every_tick{{0, kTickNs}, {0, kTickNs}};
@@ -247,9 +258,11 @@ StopReason run_real_time(typename Support::Board& board, BoardLoop<Support>& loo
     if (woke_s - due_s > stats.max_wakeup_latency_s) stats.max_wakeup_latency_s = woke_s - due_s;
     bool work_due = false;
     for (std::uint64_t i = 0; i < ticks; ++i) {
-      if (!drain(
-              can, loop, [](bool) {}, failure))
-        return StopReason::kBusError;
+      for (int b = 0; b < loop.bus_count(); ++b) {
+        if (!drain(
+                loop.bus(b), loop, [](bool) {}, failure))
+          return StopReason::kBusError;
+      }
       work_due = loop.tick(woke_s - start_s) || work_due;
     }
     if (work_due) Support::run_work(board);

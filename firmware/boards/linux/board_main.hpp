@@ -1,5 +1,5 @@
-// What a Linux board program does around its application, written once: stop signals, the bus
-// (this node's frames), the --log, memory locking, the ready line, the loop (board_loop.hpp),
+// What a Linux board program does around its application, written once: stop signals, the
+// buses (this node's frames; the HIL's I/O bus where it is another interface), the --log, memory locking, the ready line, the loop (board_loop.hpp),
 // the final safe command and the stop report. The application's main parses its options,
 // builds its board and prints its summary.
 #pragma once
@@ -45,9 +45,13 @@ int run_board(const char* program, const BoardOptions& options, typename Support
     return 1;
   }
   // Only this node's frames: the board ignores the rest anyway.
-  SocketCan can;
-  if (!hmpc::platform::open_node_bus<typename Support::Description>(can, options.interface,
-                                                                    options.node, true, error)) {
+  using Description = typename Support::Description;
+  SocketCan robot, io;
+  const bool separate_io = !options.io_interface.empty() && options.io_interface != options.interface;
+  if (!hmpc::platform::open_node_bus<Description>(robot, options.interface, options.node, true,
+                                                  error) ||
+      (separate_io && !hmpc::platform::open_node_bus<Description>(io, options.io_interface,
+                                                                  options.node, true, error))) {
     std::fprintf(stderr, "%s: %s\n", program, error.c_str());
     return 1;
   }
@@ -57,14 +61,15 @@ int run_board(const char* program, const BoardOptions& options, typename Support
     std::fprintf(stderr, "%s: %s\n", program, error.c_str());
     return 1;
   }
-  BoardLoop<Support> loop(board, options.node, safe, can, log);
+  BoardLoop<Support> loop(board, options.node, safe, robot, separate_io ? &io : nullptr, log);
   if (!options.lockstep && ::mlockall(MCL_CURRENT | MCL_FUTURE) < 0) {
     std::fprintf(stderr, "%s: note: mlockall failed (%s): page faults may delay ticks\n", program,
                  std::strerror(errno));
   }
-  std::printf("%s: node %u on %s, %s%s: ready\n", program, unsigned(options.node),
-              options.interface.c_str(), options.lockstep ? "lock-step" : "real time, 1 kHz",
-              mode_text);
+  std::printf("%s: node %u on %s%s%s, %s%s: ready\n", program, unsigned(options.node),
+              options.interface.c_str(), separate_io ? " (I/O bus " : "",
+              separate_io ? (options.io_interface + ")").c_str() : "",
+              options.lockstep ? "lock-step" : "real time, 1 kHz", mode_text);
   std::fflush(stdout);
 
   LoopFailure failure;
@@ -72,8 +77,8 @@ int run_board(const char* program, const BoardOptions& options, typename Support
   heap_monitor::arm();
   const StopReason reason =
       options.lockstep
-          ? run_lockstep(board, loop, can, signals.get(), start_s, options.duration_s, failure)
-          : run_real_time(board, loop, can, signals.get(), start_s, options.duration_s, failure);
+          ? run_lockstep(board, loop, signals.get(), start_s, options.duration_s, failure)
+          : run_real_time(board, loop, signals.get(), start_s, options.duration_s, failure);
   heap_monitor::disarm();
 
   RunResult result;

@@ -14,6 +14,7 @@ namespace hmpc::linux_board {
 
 struct BoardOptions {
   std::string interface = "vcan0";
+  std::string io_interface;  // HIL: the plant's I/O bus; empty: the same as `interface`
   protocol::NodeId node = 0;
   bool lockstep = false;
   double duration_s = 0;  // 0: until SIGINT or SIGTERM
@@ -31,6 +32,9 @@ inline void print_board_options(std::FILE* out) {
   std::fprintf(
       out,
       "  --interface IFACE   SocketCAN interface, e.g. can0 or vcan0 (default: vcan0)\n"
+      "  --io-interface IFACE\n"
+      "                      HIL: the interface of the plant's I/O bus (sensors, valves, Sync)\n"
+      "                      when it is not --interface, e.g. vcan1\n"
       "  --node N            board node id on the bus, 0..15 (default: 0)\n"
       "  --lockstep          HIL lock-step: each valid Sync frame from the plant is one 1 kHz\n"
       "                      tick (deterministic; default: real time, ticks paced by a 1 kHz\n"
@@ -48,6 +52,13 @@ inline void add_board_options(cli::OptionParser& parser, BoardOptions& options,
       return cli::bad_value("--interface",
                             "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
     options.interface = v;
+    return {};
+  });
+  parser.text("--io-interface", [&options](const std::string& v) -> std::string {
+    if (v.empty() || v.size() >= IFNAMSIZ)
+      return cli::bad_value("--io-interface",
+                            "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
+    options.io_interface = v;
     return {};
   });
   parser.integer("--node", 0, max_node, options.node);

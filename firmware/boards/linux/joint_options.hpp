@@ -23,7 +23,7 @@ struct JointOptions {
 
 inline void print_joint_usage(std::FILE* out) {
   std::fprintf(out,
-               "usage: hmpc-joint-board [--interface IFACE] [--node N] [--lockstep]\n"
+               "usage: hmpc-joint-board [--interface IFACE] [--io-interface IFACE] [--node N] [--lockstep]\n"
                "                        [--duration SECONDS] [--log FILE] [--joints N]\n"
                "                        [--control-period-ms 1..6] [--no-load-velocity-feedback]\n"
                "                        [--believed-actuator-scale S] [--stored-offsets]\n");

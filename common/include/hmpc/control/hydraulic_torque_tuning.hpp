@@ -2,11 +2,12 @@
 // torque, output the valve command), from the actuator's linearised torque rate
 //   d tau / dt = k_q u - k_v theta'                                (models/hydraulic_joint.hpp)
 // at the valve's no-load operating point. The loop without the velocity term is an integrator
-// of gain k_q behind the sampling's delay (half a period of zero-order hold, one period from
-// measurement to the valve command taking effect): 1.5 T. Proportional gain puts the crossover
-// at omega_c = kp k_q; a 30 degree phase loss to the delay at crossover leaves a 60 degree
-// margin:
-//   omega_c = (pi / 6) / (1.5 T),  kp = omega_c / k_q,  ki = kp omega_c / 5,  k_lv = k_v / k_q.
+// of gain k_q behind a delay D: half the control period T (the zero-order hold), the board's
+// 1 ms I/O tick from the sensor sample to the valve drive, and the valve's own lag tau_v.
+// Proportional gain puts the crossover at omega_c = kp k_q; a 30 degree phase loss to the
+// delay at crossover leaves a 60 degree margin:
+//   D = T / 2 + 1 ms + tau_v,  omega_c = (pi / 6) / D,
+//   kp = omega_c / k_q,  ki = kp omega_c / 5,  k_lv = k_v / k_q.
 // The integral's corner a fifth of the crossover costs about 11 degrees more (our choice: it
 // removes the friction's steady error within a few crossover periods). k_lv cancels the
 // load-velocity coupling (thesis Sec. 2.7.3); the same kp and ki serve a PID without it, so the
@@ -39,6 +40,9 @@ JointActuatorState<Scalar> no_load_operating_point(const JointActuatorParameters
   return s;
 }
 
+// The board's I/O tick: a sensor sample reaches the valve drive within it.
+inline constexpr double kIoTickSeconds = 0.001;
+
 // The procedure above for control period T (s), from the actuator constants the controller
 // believes (which may differ from the plant's).
 template <typename Scalar>
@@ -47,7 +51,8 @@ TorqueLoopGains<Scalar> tune_torque_loop(const JointActuatorParameters<Scalar>& 
   const TorqueRateGains<Scalar> k =
       torque_rate_gains(believed, no_load_operating_point(believed), Scalar(0));
   const Scalar pi = Scalar(3.14159265358979323846);
-  const Scalar crossover = (pi / Scalar(6)) / (Scalar(1.5) * period);
+  const Scalar delay = period / Scalar(2) + Scalar(kIoTickSeconds) + believed.valve_time_constant;
+  const Scalar crossover = (pi / Scalar(6)) / delay;
   TorqueLoopGains<Scalar> gains;
   gains.kp = crossover / k.valve;
   gains.ki = gains.kp * crossover / Scalar(5);
