@@ -190,7 +190,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       needs_initialization_ = false;
     }
     SolveStatus status = SolveStatus::kConverged;
-    Control plan;
+    Control plan = plan_;
     with_strategy([&](auto& mpc) {
       forearm::set_time(mpc, host_time());
       plan = mpc.update(x_, stop);

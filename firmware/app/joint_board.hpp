@@ -344,8 +344,12 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
       // The rate limit: the applied reference moves at most torque_rate_limit * T per step.
       const Scalar step = c.torque_rate_limit * period;
       applied_[j] = clamp(wanted, applied_[j] - step, applied_[j] + step);
-      valve_[j] = Pid::update(c.torque_loop, torque_state_[j], applied_[j], m.tau, m.theta_dot,
-                              period);
+      // The load-velocity gain at this operating point: the configured (no-load) one scaled by
+      // the model's k_v / k_q here, from the measured pressures, angle and valve side.
+      auto loop = c.torque_loop;
+      const hydraulic::JointActuatorState<Scalar> here{valve_[j], m.pressure_a, m.pressure_b};
+      loop.load_velocity_gain *= hydraulic::load_velocity_schedule(c.actuator, here, m.theta);
+      valve_[j] = Pid::update(loop, torque_state_[j], applied_[j], m.tau, m.theta_dot, period);
     }
   }
 

@@ -174,8 +174,10 @@ struct Figures {
   std::uint64_t measured = 0;
   double max_abs_omega = 0, max_abs_error = 0;
   std::int64_t last_heartbeat_tick = -1;
-  std::int64_t valves_centred_tick = -1;  // first tick after the silence with u = 0 held
-  std::int64_t estop_tick = -1, estop_centred_tick = -1;
+  // The last tick with a valve open: the valves are centred for good from the next one on
+  // (a valve command can round to exactly 0 in the frame now and then before that).
+  std::int64_t last_open_tick = -1;
+  std::int64_t estop_tick = -1;
   std::uint64_t board_frames = 0, rejected_board_frames = 0;
   proto::BoardStatus status{};
   bool status_seen = false;
@@ -292,15 +294,7 @@ class Rig {
       ++figures_.measured;
       figures_.max_abs_omega = std::max(figures_.max_abs_omega, std::abs(x.omega));
     }
-    // Valves centred and held since: the safe state after the host fell silent, or the E-stop.
-    const bool centred = u_ == 0.0;
-    if (figures_.last_heartbeat_tick >= 0 && o_.stop_heartbeat_at_s >= 0 &&
-        t >= o_.stop_heartbeat_at_s && figures_.valves_centred_tick < 0 && centred) {
-      figures_.valves_centred_tick = std::int64_t(k);
-    }
-    if (figures_.estop_tick >= 0 && figures_.estop_centred_tick < 0 && centred) {
-      figures_.estop_centred_tick = std::int64_t(k);
-    }
+    if (u_ != 0.0) figures_.last_open_tick = std::int64_t(k);
     if (log_) {
       std::fprintf(log_, "%.3f,%.4f,%.4f,%.5f,%.5f,%.5f,%.4f,%.4f,%s\n", t, ref, tau, x.theta,
                    x.omega, u_, x.actuator.pressure_a * 1e-6, x.actuator.pressure_b * 1e-6,
@@ -526,8 +520,12 @@ int main(int argc, char** argv) {
     }
     const Figures& f = rig.figures();
     const double rms = f.measured > 0 ? std::sqrt(f.squared_error / double(f.measured)) : 0.0;
-    const auto after = [](std::int64_t from, std::int64_t to) {
-      return from >= 0 && to >= 0 ? to - from : -1;
+    // Ticks from an event to the first of the valves centred for good; -1 without the event,
+    // or when a valve was still open at the end.
+    const std::int64_t centred_tick =
+        f.last_open_tick + 1 < std::int64_t(f.ticks) ? f.last_open_tick + 1 : -1;
+    const auto after = [centred_tick](std::int64_t from, bool happened) {
+      return happened && from >= 0 && centred_tick >= from ? centred_tick - from : -1;
     };
     std::printf(
         "%s: summary ticks=%llu rms_torque_error=%.4f max_abs_torque_error=%.3f "
@@ -542,9 +540,9 @@ int main(int argc, char** argv) {
                       : "unseen",
         unsigned(f.status.faults), unsigned(f.status.rejected_frames), double(f.offset.offset),
         f.offset.zeroed ? 1 : 0, static_cast<long long>(f.last_heartbeat_tick),
-        static_cast<long long>(after(f.last_heartbeat_tick, f.valves_centred_tick)),
+        static_cast<long long>(after(f.last_heartbeat_tick, o.stop_heartbeat_at_s >= 0)),
         static_cast<long long>(f.estop_tick),
-        static_cast<long long>(after(f.estop_tick, f.estop_centred_tick)),
+        static_cast<long long>(after(f.estop_tick, f.estop_tick >= 0)),
         static_cast<unsigned long long>(f.board_frames),
         static_cast<unsigned long long>(f.rejected_board_frames),
         static_cast<unsigned long long>(rig.sensor_faults().dropped),

@@ -12,14 +12,14 @@
 #include <thread>
 #include <vector>
 
-#include "child_process.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 #include "hil_run.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 
 namespace {
 
 namespace proto = hmpc::forearm_protocol;
-using hmpc::hil::Child;
+using hmpc::platform::Child;
 
 constexpr std::uint32_t kDomain = 88;  // no other test uses it
 constexpr double kWaitS = 120;         // lock-step under QEMU without KVM runs ~0.2x real time
@@ -126,12 +126,12 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
   EXPECT_EQ(plant.stop(30), 0) << plant.errors();
   EXPECT_EQ(host.stop(30), 0) << host.errors();
   EXPECT_EQ(board.stop(30), 0) << board.errors();
-  const auto summary = hmpc::hil::parse_summary(host.output());
+  const auto summary = hmpc::platform::parse_summary(host.output());
   EXPECT_EQ(summary.at("dds_commands"), "3");  // hold, run, idle
   EXPECT_EQ(summary.at("dds_rejected_commands"), "1");
   EXPECT_NE(host.errors().find("amplitude"), std::string::npos)
       << "the rejection names the field: " << host.errors();
-  const auto board_summary = hmpc::hil::parse_summary(board.output());
+  const auto board_summary = hmpc::platform::parse_summary(board.output());
   EXPECT_EQ(board_summary.at("faults"), "0x00");
   EXPECT_EQ(board_summary.at("rejected_frames"), "0");
 }

@@ -22,7 +22,7 @@
 #include <thread>
 #include <vector>
 
-#include "child_process.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 #include "forearm_hil_support.hpp"
 
 namespace {
@@ -320,7 +320,7 @@ TEST(ForearmHilFaults, CorruptedHostFramesAreRejectedNeverActedOn) {
 // asserted.
 
 struct RealTimeRun {
-  hmpc::hil::Child board, host, plant;
+  hmpc::platform::Child board, host, plant;
   std::string dir;
   std::string error;
 
@@ -367,7 +367,7 @@ TEST(ForearmHilFaultsRealTime, KilledPlantTripsTheSensorWatchdogAndItsLogSurvive
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   EXPECT_EQ(run.host.stop(30), 0) << run.host.errors();
   EXPECT_EQ(run.board.stop(30), 0) << run.board.errors();
-  const auto board = hmpc::hil::parse_summary(run.board.output());
+  const auto board = hmpc::platform::parse_summary(run.board.output());
   ASSERT_FALSE(board.empty()) << run.board.output();
   EXPECT_EQ(board.at("mode"), "fault");
   EXPECT_TRUE(std::stoul(board.at("faults"), nullptr, 16) & proto::fault::kSensorTimeout);
@@ -414,9 +414,9 @@ TEST(ForearmHilFaultsRealTime, BusDownAndUpIsSurvivedAndTheBoardGoesSafe) {
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
   EXPECT_EQ(run.host.stop(30), 0) << run.host.errors();
   EXPECT_EQ(run.board.stop(30), 0) << run.board.errors();
-  const auto board = hmpc::hil::parse_summary(run.board.output());
-  const auto host = hmpc::hil::parse_summary(run.host.output());
-  const auto plant = hmpc::hil::parse_summary(run.plant.output());
+  const auto board = hmpc::platform::parse_summary(run.board.output());
+  const auto host = hmpc::platform::parse_summary(run.host.output());
+  const auto plant = hmpc::platform::parse_summary(run.plant.output());
   ASSERT_FALSE(board.empty() || host.empty() || plant.empty());
   EXPECT_GT(std::stod(board.at("interface_down")) + std::stod(board.at("transmit_failures")), 0);
   EXPECT_GT(std::stod(host.at("interface_down")), 0);
@@ -449,14 +449,14 @@ TEST(ForearmHilFaultsRealTime, BusDownAndUpIsSurvivedAndTheBoardGoesSafe) {
 TEST(ForearmPlantNode, RealTimeModeIsPacedByTheClockAndReportsItsSpeed) {
   const std::string out = work_dir() + "/plant_real_time";
   std::filesystem::create_directories(out);
-  hmpc::hil::Child plant;
+  hmpc::platform::Child plant;
   std::string error;
   ASSERT_TRUE(plant.start(hmpc::hil::HilPrograms::built().plant,
                           {"--node", "9", "--duration", "0.5", "--log", out + "/plant.csv"},
                           out + "/plant.out", error))
       << error;
   ASSERT_EQ(plant.wait(120), 0) << plant.errors();
-  const auto s = hmpc::hil::parse_summary(plant.output());
+  const auto s = hmpc::platform::parse_summary(plant.output());
   std::printf("real time: %s s wall for 0.5 s, real-time factor %s, deadline misses %s\n",
               s.at("wall_seconds").c_str(), s.at("real_time_factor").c_str(),
               s.at("deadline_misses").c_str());

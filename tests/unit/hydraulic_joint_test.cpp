@@ -3,6 +3,9 @@
 // of a blocked joint, and the load-velocity coupling's sign and size.
 #include "hmpc/models/hydraulic_joint.hpp"
 
+#include "hmpc/control/hydraulic_torque_tuning.hpp"
+#include "hmpc/models/hydraulic_pendulum.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -235,6 +238,70 @@ TEST(HydraulicJointTorque, FloatAgreesWithDouble) {
   EXPECT_NEAR(df.pressure_a, dd.pressure_a, 1e-4 * std::abs(dd.pressure_a));
   EXPECT_NEAR(df.pressure_b, dd.pressure_b, 1e-4 * std::abs(dd.pressure_b));
   EXPECT_NEAR(hy::joint_torque(pf, sf, 0.4F), hy::joint_torque(pd, sd, 0.4), 1e-3);
+}
+
+// ---------------------------------------------------------------------------------------
+// The torque loop's tuning procedure and the in-process pendulum.
+
+// The no-load operating point: no net force, and equal flow per piston area through both
+// lands (a spool just opened moves the piston without loading it).
+TEST(HydraulicTorqueTuning, NoLoadOperatingPointBalancesForceAndFlow) {
+  const Parameters p;
+  const State s = hy::no_load_operating_point(p);
+  EXPECT_NEAR(p.area_a * s.pressure_a - p.area_b * s.pressure_b, 0.0, 1e-9 * p.supply_pressure);
+  EXPECT_NEAR((p.supply_pressure - s.pressure_a) / (p.area_a * p.area_a),
+              s.pressure_b / (p.area_b * p.area_b), 1e-6 * p.supply_pressure / (p.area_a * p.area_a));
+}
+
+TEST(HydraulicTorqueTuning, GainsFollowTheStatedProcedure) {
+  const Parameters p;
+  const auto k = hy::torque_rate_gains(p, hy::no_load_operating_point(p), 0.0);
+  for (const double period : {0.006, 0.001}) {
+    const auto g = hy::tune_torque_loop(p, period);
+    const double crossover = (M_PI / 6) / (period / 2 + 0.001 + p.valve_time_constant);
+    EXPECT_NEAR(g.kp * k.valve, crossover, 1e-9 * crossover) << period;
+    EXPECT_NEAR(g.ki, g.kp * crossover / 5, 1e-12) << period;
+    EXPECT_NEAR(g.k_lv, 0.9 * k.load_velocity / k.valve, 1e-12) << period;
+  }
+  // Constants believed 20 % higher: less gain, and a smaller load-velocity term.
+  Parameters high = p;
+  high.bulk_modulus *= 1.2;
+  high.valve_flow_gain *= 1.2;
+  EXPECT_LT(hy::tune_torque_loop(high, 0.006).kp, hy::tune_torque_loop(p, 0.006).kp);
+  EXPECT_NEAR(hy::tune_torque_loop(high, 0.006).k_lv, hy::tune_torque_loop(p, 0.006).k_lv / 1.2,
+              1e-9);
+}
+
+// The schedule is 1 at the no-load point, rises as the open land's pressure drop shrinks (the
+// valve's flow gain k_q falls, the coupling does not) and stays within [0, 2].
+TEST(HydraulicTorqueTuning, LoadVelocityScheduleFollowsTheOperatingPoint) {
+  const Parameters p;
+  const State nominal = hy::no_load_operating_point(p);
+  EXPECT_NEAR(hy::load_velocity_schedule(p, nominal, 0.0), 1.0, 1e-12);
+  State loaded = nominal;
+  loaded.pressure_a = 0.8 * p.supply_pressure;  // pushing hard: little drop across land a
+  const double pushing = hy::load_velocity_schedule(p, loaded, 0.0);
+  EXPECT_GT(pushing, 1.0);
+  EXPECT_LE(pushing, 2.0);
+  loaded.pressure_a = p.supply_pressure;  // no drop at all: k_q of land a vanishes
+  loaded.pressure_b = 0;
+  EXPECT_EQ(hy::load_velocity_schedule(p, loaded, 0.0), 2.0);
+}
+
+// The in-process pendulum: at rest hanging it stays; released it swings at sqrt(m g l / I)
+// while the locked chambers hold the actuator (the oil spring is far stiffer than gravity's).
+TEST(HydraulicPendulum, RestsHangingAndHoldsAReleasedLegOnTheOil) {
+  const Parameters p;
+  const auto load = hy::PendulumLoad<double>::leg();
+  auto x = hy::torque_free_rest(p);
+  for (int i = 0; i < 100; ++i) hy::step_pendulum(p, load, x, 0.0, 1e-3, 20);
+  EXPECT_NEAR(x.theta, 0.0, 1e-9);
+  auto lifted = hy::torque_free_rest(p);
+  lifted.theta = 0.2;
+  for (int i = 0; i < 500; ++i) hy::step_pendulum(p, load, lifted, 0.0, 1e-3, 20);
+  // Gravity's 12.5 N·m on the oil's ~5e3 N·m/rad: a few milliradians of sag, no fall.
+  EXPECT_NEAR(lifted.theta, 0.2, 0.01);
+  EXPECT_LT(lifted.theta, 0.2);
 }
 
 }  // namespace

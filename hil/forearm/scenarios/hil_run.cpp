@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "child_process.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 #include "hmpc/models/forearm_problems.hpp"
 
 namespace hmpc::hil {
@@ -76,19 +76,6 @@ bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, st
   });
 }
 
-std::map<std::string, std::string> parse_summary(const std::string& text) {
-  std::map<std::string, std::string> out;
-  const std::size_t at = text.rfind(": summary ");
-  if (at == std::string::npos) return out;
-  std::istringstream words(text.substr(at + 10, text.find('\n', at) - at - 10));
-  std::string word;
-  while (words >> word) {
-    const std::size_t eq = word.find('=');
-    if (eq != std::string::npos) out[word.substr(0, eq)] = word.substr(eq + 1);
-  }
-  return out;
-}
-
 double HilRunResult::number(const std::map<std::string, std::string>& summary,
                             const std::string& key) const {
   const auto it = summary.find(key);
@@ -150,7 +137,7 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
                                       dir + "plant.csv"};
   plant_args.insert(plant_args.end(), spec.plant_args.begin(), spec.plant_args.end());
 
-  Child board, host, plant;
+  platform::Child board, host, plant;
   if (!board.start(programs.board, board_args, dir + "board.out", result.error) ||
       !host.start(programs.host, host_args, dir + "host.out", result.error)) {
     return result;
@@ -163,9 +150,9 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
   const int plant_status = plant.wait(kStartupS + kWallPerSimulatedS * duration);
   const int host_status = host.stop(kStopS);
   const int board_status = board.stop(kStopS);
-  result.board = parse_summary(board.output());
-  result.plant = parse_summary(plant.output());
-  result.host = parse_summary(host.output());
+  result.board = platform::parse_summary(board.output());
+  result.plant = platform::parse_summary(plant.output());
+  result.host = platform::parse_summary(host.output());
   const int expected_host_status = spec.host_dies ? 128 + SIGKILL : 0;
   if (plant_status != 0 || host_status != expected_host_status || board_status != 0) {
     result.error = "exit status plant " + std::to_string(plant_status) + ", host " +

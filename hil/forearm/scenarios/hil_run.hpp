@@ -85,7 +85,4 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs);
 bool read_plant_log(const std::string& path, std::vector<PlantRow>& rows, std::string& error);
 bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, std::string& error);
 
-// "prog: summary k=v k=v ..." -> {k: v}; the last summary line of `text` counts.
-std::map<std::string, std::string> parse_summary(const std::string& text);
-
 }  // namespace hmpc::hil

@@ -1,5 +1,6 @@
 // A program run as a child process with its stdout and stderr in files, for the HIL runs and
-// tests: start, wait for a line of output, wait for the exit with a timeout, stop.
+// tests: start, wait for a line of output, wait for the exit with a timeout, stop; and the
+// key=value summary line the programs print at exit.
 #pragma once
 
 #include <fcntl.h>
@@ -11,18 +12,33 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
-namespace hmpc::hil {
+namespace hmpc::platform {
 
 inline std::string read_file(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// The key=value pairs of the last "<program>: summary ..." line in a program's output.
+inline std::map<std::string, std::string> parse_summary(const std::string& text) {
+  std::map<std::string, std::string> out;
+  const std::size_t at = text.rfind(": summary ");
+  if (at == std::string::npos) return out;
+  std::istringstream words(text.substr(at + 10, text.find('\n', at) - at - 10));
+  std::string word;
+  while (words >> word) {
+    const std::size_t eq = word.find('=');
+    if (eq != std::string::npos) out[word.substr(0, eq)] = word.substr(eq + 1);
+  }
+  return out;
 }
 
 // A program with its stdout in `output` and its stderr in `output`.err.
@@ -107,4 +123,4 @@ class Child {
   std::string output_;
 };
 
-}  // namespace hmpc::hil
+}  // namespace hmpc::platform
