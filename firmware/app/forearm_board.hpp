@@ -145,9 +145,10 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   explicit ForearmBoard(const Config& config, WallClock clock = nullptr)
       : Runtime(RuntimeConfig{config.node, config.heartbeat_timeout_ticks,
                               config.sensor_timeout_ticks}),
-        config_(config), clock_(clock), fine4_(Strategies::fine4(setup())), fine8_(Strategies::fine8(setup())),
-        coarse20_(Strategies::coarse20(setup())), coarse40_(Strategies::coarse40(setup())),
-        two_stage_(Strategies::two_stage(setup())), pam_only_(Strategies::pam_only(setup())) {
+        config_(config), clock_(clock), fine4_(Strategies::fine4(setup())),
+        fine8_(Strategies::fine8(setup())), coarse20_(Strategies::coarse20(setup())),
+        coarse40_(Strategies::coarse40(setup())), two_stage_(Strategies::two_stage(setup())),
+        pam_only_(Strategies::pam_only(setup())) {
     target_.set_constant(Scalar(0));
   }
 
@@ -199,7 +200,8 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       last_iterations_ = mpc.last_iterations();
       record_layers(mpc, status);
     });
-    if (config_.solver_failure_from_tick != 0 && this->ticks() >= config_.solver_failure_from_tick) {
+    if (config_.solver_failure_from_tick != 0 &&
+        this->ticks() >= config_.solver_failure_from_tick) {
       usable_ = false;
       status = SolveStatus::kNumericalFailure;
       plan = plan_;
@@ -341,8 +343,8 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       case proto::BoardMode::kRun: apply_plan(); break;
       default: apply_safe_outputs(); break;
     }
-    mpc_due_ = mode == proto::BoardMode::kRun && this->ticks() % kTicksPerMpcStep == 0 &&
-               !solve_pending_;
+    mpc_due_ =
+        mode == proto::BoardMode::kRun && this->ticks() % kTicksPerMpcStep == 0 && !solve_pending_;
   }
 
   void apply_safe_outputs() { outputs_ = {config_.safe_v_p, config_.safe_v_m}; }
@@ -414,8 +416,8 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       this->send(proto::JointState{float(x_(0)), float(x_(1)), float(x_(2) / Scalar(10)), 0});
       const Scalar tau_p = forearm::pam_torque(p, x_(2), x_(0)).tau;
       this->send(proto::ActuatorOutputs{float(outputs_.v_p), float(outputs_.v_m),
-                                  float(clamp(tau_p, Scalar(-30), Scalar(30))),
-                                  float(p.motor_gain * outputs_.v_m), 0});
+                                        float(clamp(tau_p, Scalar(-30), Scalar(30))),
+                                        float(p.motor_gain * outputs_.v_m), 0});
       telemetry_.tracking_error =
           float(clamp(target_.angle(host_time()) - x_(0), Scalar(-6.28), Scalar(6.28)));
       if (this->mode() != proto::BoardMode::kRun) {

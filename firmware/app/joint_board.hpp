@@ -81,7 +81,7 @@ struct JointConfig {
 template <typename Scalar>
 struct JointBoardConfig {
   joint_proto::NodeId node = 0;
-  std::size_t joints = joint_proto::kMaxJointsPerBoard;  // 1..4
+  std::size_t joints = joint_proto::kMaxJointsPerBoard;             // 1..4
   int control_period_ticks = joint_proto::kDefaultControlPeriodMs;  // 6 ms, or 1
   // ModeCommand comes every 10 ms: 30 ms (two lost in a row, five 6 ms control periods) trips.
   int heartbeat_timeout_ticks = 30;
@@ -276,8 +276,12 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
       case FrameType::kJointSensor1: receive_sensor<1>(frame); break;
       case FrameType::kJointSensor2: receive_sensor<2>(frame); break;
       case FrameType::kJointSensor3: receive_sensor<3>(frame); break;
-      case FrameType::kChamberPressures01: receive_pressures<joint_proto::ChamberPressures01>(frame, 0); break;
-      case FrameType::kChamberPressures23: receive_pressures<joint_proto::ChamberPressures23>(frame, 2); break;
+      case FrameType::kChamberPressures01:
+        receive_pressures<joint_proto::ChamberPressures01>(frame, 0);
+        break;
+      case FrameType::kChamberPressures23:
+        receive_pressures<joint_proto::ChamberPressures23>(frame, 2);
+        break;
       default:  // frames this board sends, or the IMU's
         break;
     }
@@ -318,8 +322,7 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
   }
 
   void control_step(joint_proto::BoardMode mode) {
-    if (mode == joint_proto::BoardMode::kRun &&
-        reference_age_ticks() > reference_timeout_ticks()) {
+    if (mode == joint_proto::BoardMode::kRun && reference_age_ticks() > reference_timeout_ticks()) {
       ++counters_.stale_references;
       this->set_fault_bits(joint_proto::fault::kStaleReference);
       enter_hold();
@@ -338,8 +341,8 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
       const JointMeasurement<Scalar>& m = measured_[j];
       Scalar wanted = reference_[j];
       if (mode == joint_proto::BoardMode::kHold) {
-        wanted = Pid::update(c.hold_loop, hold_state_[j], hold_target_[j], m.theta, m.theta_dot,
-                             period);
+        wanted =
+            Pid::update(c.hold_loop, hold_state_[j], hold_target_[j], m.theta, m.theta_dot, period);
       }
       // The rate limit: the applied reference moves at most torque_rate_limit * T per step.
       const Scalar step = c.torque_rate_limit * period;
@@ -432,8 +435,8 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
     std::uint32_t oldest_age = 0;
     for (std::size_t j = 0; j < config_.joints; ++j) {
       if (!joint_sensor_seen_[j] || !pressure_seen_[j]) return;
-      const std::uint32_t age = std::max(this->ticks() - joint_sensor_tick_[j],
-                                         this->ticks() - pressure_tick_[j]);
+      const std::uint32_t age =
+          std::max(this->ticks() - joint_sensor_tick_[j], this->ticks() - pressure_tick_[j]);
       oldest_age = std::max(oldest_age, age);
     }
     this->note_sensor_at(this->ticks() - oldest_age);
@@ -442,7 +445,8 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
   template <std::size_t kJoint>
   void receive_sensor(const joint_proto::Frame& frame) {
     joint_proto::JointSensor<kJoint> s;
-    if (this->receive(frame, s)) on_joint_sensor(kJoint, Scalar(s.theta), Scalar(s.theta_dot), Scalar(s.tau));
+    if (this->receive(frame, s))
+      on_joint_sensor(kJoint, Scalar(s.theta), Scalar(s.theta_dot), Scalar(s.tau));
   }
   template <class Message>
   void receive_pressures(const joint_proto::Frame& frame, std::size_t first_joint) {
@@ -469,35 +473,33 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
   }
 
   void on_torque_gains(const joint_proto::TorqueGains& g) {
-    if (g.joint >= config_.joints) {
-      ++counters_.refused_gains;
-      return;
-    }
-    auto c = config_.joint[g.joint].torque_loop;
-    c.kp = Scalar(g.kp);
-    c.ki = Scalar(g.ki);
-    c.load_velocity_gain = Scalar(g.k_lv);
-    if (!Pid::config_valid(c)) {
-      ++counters_.refused_gains;
-      return;
-    }
-    config_.joint[g.joint].torque_loop = c;
+    adopt_gains(g.joint, &JointConfig<Scalar>::torque_loop, [&g](typename Pid::Config& c) {
+      c.kp = Scalar(g.kp);
+      c.ki = Scalar(g.ki);
+      c.load_velocity_gain = Scalar(g.k_lv);
+    });
   }
-
   void on_hold_gains(const joint_proto::HoldGains& g) {
-    if (g.joint >= config_.joints) {
+    adopt_gains(g.joint, &JointConfig<Scalar>::hold_loop, [&g](typename Pid::Config& c) {
+      c.kp = Scalar(g.kp);
+      c.ki = Scalar(g.ki);
+      c.kd = Scalar(g.kd);
+    });
+  }
+  // Gains for a joint the board lacks, or that make an unusable loop, are refused and counted.
+  template <class Set>
+  void adopt_gains(std::size_t joint, typename Pid::Config JointConfig<Scalar>::*loop, Set&& set) {
+    if (joint >= config_.joints) {
       ++counters_.refused_gains;
       return;
     }
-    auto c = config_.joint[g.joint].hold_loop;
-    c.kp = Scalar(g.kp);
-    c.ki = Scalar(g.ki);
-    c.kd = Scalar(g.kd);
+    typename Pid::Config c = config_.joint[joint].*loop;
+    set(c);
     if (!Pid::config_valid(c)) {
       ++counters_.refused_gains;
       return;
     }
-    config_.joint[g.joint].hold_loop = c;
+    config_.joint[joint].*loop = c;
   }
 
   template <std::size_t... kJoints>

@@ -61,12 +61,12 @@ struct Options {
   bool lockstep = false;
   double duration_s = 6;
   Profile profile = Profile::kSine;
-  double amplitude = 20;     // N·m
-  double frequency = 2;      // Hz; the chirp's start
-  double chirp_to = 6;       // Hz, the chirp's end (at the end of the run)
-  double run_at_s = 1.0;     // the host asks for run; references start a period before
+  double amplitude = 20;      // N·m
+  double frequency = 2;       // Hz; the chirp's start
+  double chirp_to = 6;        // Hz, the chirp's end (at the end of the run)
+  double run_at_s = 1.0;      // the host asks for run; references start a period before
   double measure_from_s = 2;  // the RMS window's start
-  double swing = 0;          // rad: the leg starts there, at rest, and swings when released
+  double swing = 0;           // rad: the leg starts there, at rest, and swings when released
   hmpc::hil::JointMismatch mismatch{};
   double noise = 0;  // multiplies the noise above
   std::uint64_t seed = 1;
@@ -128,10 +128,14 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.flag("--lockstep", o.lockstep);
   p.number("--duration", 0.01, 3600, "seconds in [0.01, 3600]", o.duration_s);
   p.text("--profile", [&o](const std::string& v) -> std::string {
-    if (v == "step") o.profile = Profile::kStep;
-    else if (v == "sine") o.profile = Profile::kSine;
-    else if (v == "chirp") o.profile = Profile::kChirp;
-    else return hmpc::cli::bad_value("--profile", "step, sine or chirp", v);
+    if (v == "step")
+      o.profile = Profile::kStep;
+    else if (v == "sine")
+      o.profile = Profile::kSine;
+    else if (v == "chirp")
+      o.profile = Profile::kChirp;
+    else
+      return hmpc::cli::bad_value("--profile", "step, sine or chirp", v);
     return {};
   });
   p.number("--amplitude", 0, 60, "N·m in [0, 60]", o.amplitude);
@@ -160,8 +164,9 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   });
   const auto outcome = p.parse(argc, argv, error);
   if (outcome == hmpc::cli::ParseOutcome::kRun && o.io_interface == o.robot_interface) {
-    error = "--io-interface must differ from --robot-interface (the robot bus carries no plant "
-            "frames)";
+    error =
+        "--io-interface must differ from --robot-interface (the robot bus carries no plant "
+        "frames)";
     return hmpc::cli::ParseOutcome::kError;
   }
   o.sensor_faults.seed = o.seed;
@@ -187,9 +192,9 @@ struct Figures {
 class Rig {
  public:
   Rig(const Options& o, SocketCan& robot, SocketCan& io)
-      : o_(o), robot_(robot), io_(io), plant_(hy::JointActuatorParameters<double>{},
-                                              hy::PendulumLoad<double>::leg(), o.mismatch,
-                                              initial(o)),
+      : o_(o), robot_(robot), io_(io),
+        plant_(hy::JointActuatorParameters<double>{}, hy::PendulumLoad<double>::leg(), o.mismatch,
+               initial(o)),
         host_(o.node), plant_sender_(o.node), from_board_(o.node), io_from_board_(o.node),
         faults_(o.sensor_faults), noise_rng_(o.seed) {}
 
@@ -209,7 +214,8 @@ class Rig {
         // Linear chirp from frequency to chirp_to over the rest of the run.
         const double span = std::max(o_.duration_s - o_.run_at_s, 1e-3);
         const double rate = (o_.chirp_to - o_.frequency) / span;
-        return o_.amplitude * std::sin(2 * M_PI * (o_.frequency * since + 0.5 * rate * since * since));
+        return o_.amplitude *
+               std::sin(2 * M_PI * (o_.frequency * since + 0.5 * rate * since * since));
       }
     }
     return 0;
@@ -534,8 +540,8 @@ int main(int argc, char** argv) {
         "valves_centred_after_last_heartbeat_ticks=%lld estop_tick=%lld "
         "valves_centred_after_estop_ticks=%lld board_frames=%llu rejected_board_frames=%llu "
         "sensor_frames_dropped=%llu sensor_frames_corrupted=%llu\n",
-        kProgram, static_cast<unsigned long long>(f.ticks), rms, f.max_abs_error,
-        f.max_abs_omega, static_cast<unsigned long long>(f.measured),
+        kProgram, static_cast<unsigned long long>(f.ticks), rms, f.max_abs_error, f.max_abs_omega,
+        static_cast<unsigned long long>(f.measured),
         f.status_seen ? proto::value_name(proto::kBoardModeValues, std::uint32_t(f.status.mode))
                       : "unseen",
         unsigned(f.status.faults), unsigned(f.status.rejected_frames), double(f.offset.offset),

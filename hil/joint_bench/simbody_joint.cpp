@@ -20,7 +20,7 @@ using Load = hydraulic::PendulumLoad<double>;
 constexpr double kAccuracy = 1e-6;
 // End stops: a stiff, damped contact (our choice: 20 kN·m/rad stops the leg within a few
 // milliradians at the speeds a valve can give it).
-constexpr double kStopStiffness = 2e4;   // N·m/rad
+constexpr double kStopStiffness = 2e4;    // N·m/rad
 constexpr double kStopDissipation = 1.0;  // s/rad (Hunt-Crossley)
 
 // The valve and the cylinder: spool opening and both chamber pressures are Simbody continuous
@@ -29,8 +29,8 @@ constexpr double kStopDissipation = 1.0;  // s/rad (Hunt-Crossley)
 // one source of truth for the actuator, shared with the boards' tests and images.
 class HydraulicActuator : public SimTK::Force::Custom::Implementation {
  public:
-  HydraulicActuator(const SimTK::GeneralForceSubsystem& forces, const SimTK::MobilizedBody::Pin& joint,
-                    const Actuator& actuator)
+  HydraulicActuator(const SimTK::GeneralForceSubsystem& forces,
+                    const SimTK::MobilizedBody::Pin& joint, const Actuator& actuator)
       : forces_(forces), joint_(joint), actuator_(actuator) {}
 
   void realizeTopology(SimTK::State& state) const override {
@@ -42,7 +42,8 @@ class HydraulicActuator : public SimTK::Force::Custom::Implementation {
     const SimTK::Vector& z = forces_.getZ(state);
     return {z[z_], z[z_ + 1], z[z_ + 2]};
   }
-  void set_actuator_state(SimTK::State& state, const hydraulic::JointActuatorState<double>& a) const {
+  void set_actuator_state(SimTK::State& state,
+                          const hydraulic::JointActuatorState<double>& a) const {
     SimTK::Vector& z = forces_.updZ(state);
     z[z_] = a.spool;
     z[z_ + 1] = a.pressure_a;
@@ -65,9 +66,9 @@ class HydraulicActuator : public SimTK::Force::Custom::Implementation {
   // Driven by the valve, not a conservative spring: no potential energy.
   SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0; }
   void realizeAcceleration(const SimTK::State& state) const override {
-    const hydraulic::JointActuatorState<double> d = hydraulic::derivative(
-        actuator_, actuator_state(state), joint_.getAngle(state), joint_.getRate(state),
-        command(state));
+    const hydraulic::JointActuatorState<double> d =
+        hydraulic::derivative(actuator_, actuator_state(state), joint_.getAngle(state),
+                              joint_.getRate(state), command(state));
     SimTK::Vector& zdot = forces_.updZDot(state);
     zdot[z_] = d.spool;
     zdot[z_ + 1] = d.pressure_a;
@@ -119,9 +120,9 @@ struct SimbodyHydraulicJoint::Impl {
   HydraulicActuator* cylinder = new HydraulicActuator(forces, joint, actuator);  // owned below
   SimTK::Force::Custom cylinder_force{forces, cylinder};
   SimTK::Force::MobilityConstantForce disturbance{forces, joint, SimTK::MobilizerUIndex(0), 0.0};
-  SimTK::Force::MobilityLinearStop stops{forces,          joint,           SimTK::MobilizerQIndex(0),
-                                         kStopStiffness,  kStopDissipation, -kStopAngle,
-                                         kStopAngle};
+  SimTK::Force::MobilityLinearStop stops{
+      forces,      joint,     SimTK::MobilizerQIndex(0), kStopStiffness, kStopDissipation,
+      -kStopAngle, kStopAngle};
   SimTK::RungeKuttaMersonIntegrator integrator{system};
   std::uint64_t rejected = 0, steps = 0;
 
@@ -137,10 +138,10 @@ struct SimbodyHydraulicJoint::Impl {
   }
 };
 
-SimbodyHydraulicJoint::SimbodyHydraulicJoint(const hydraulic::JointActuatorParameters<double>& actuator,
-                                             const hydraulic::PendulumLoad<double>& load,
-                                             const JointMismatch& mismatch,
-                                             const hydraulic::PendulumState<double>& initial) {
+SimbodyHydraulicJoint::SimbodyHydraulicJoint(
+    const hydraulic::JointActuatorParameters<double>& actuator,
+    const hydraulic::PendulumLoad<double>& load, const JointMismatch& mismatch,
+    const hydraulic::PendulumState<double>& initial) {
   check_scale("load_scale", mismatch.load_scale);
   check_scale("bulk_modulus_scale", mismatch.bulk_modulus_scale);
   check_scale("valve_flow_gain_scale", mismatch.valve_flow_gain_scale);

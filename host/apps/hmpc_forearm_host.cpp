@@ -492,7 +492,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   SocketCan can;
-  if (!hmpc::platform::open_node_bus<hmpc::forearm_protocol::Description>(can, options.interface, options.node, true, error)) {
+  if (!hmpc::platform::open_node_bus<hmpc::forearm_protocol::Description>(
+          can, options.interface, options.node, true, error)) {
     std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }

@@ -57,7 +57,7 @@ void JointBoardControlPeriod(benchmark::State& state) {
       };
       if (tick % 10 == 0) {
         jp::ModeCommand m;
-        m.mode = tick >= 300 ? jp::RequestedMode::kRun
+        m.mode = tick >= 300   ? jp::RequestedMode::kRun
                  : tick >= 100 ? jp::RequestedMode::kHold
                                : jp::RequestedMode::kIdle;
         m.zero_encoders = tick == 50;
@@ -99,7 +99,8 @@ void JointBoardControlPeriod(benchmark::State& state) {
       }
       const double us = std::chrono::duration<double, std::micro>(Clock::now() - start).count();
       if (control && tick >= 300) joint_us().push_back(us);
-      for (std::size_t j = 0; j < 4; ++j) hy::step_pendulum(actuator, load, plant[j], u[j], 1e-3, 20);
+      for (std::size_t j = 0; j < 4; ++j)
+        hy::step_pendulum(actuator, load, plant[j], u[j], 1e-3, 20);
     }
     benchmark::DoNotOptimize(u);
   }
@@ -150,9 +151,10 @@ BENCHMARK(JointBoardControlPeriod)->Iterations(3)->Unit(benchmark::kMillisecond)
 BENCHMARK(ForearmBoardControlPeriod)->Iterations(2)->Unit(benchmark::kMillisecond);
 
 void print_bus_loads() {
-  std::printf("\nJoint protocol bus load, classic CAN 1 Mbit/s, worst-case stuffing (%u bits per "
-              "frame), 8 leg joints and the torso IMU\n",
-              unsigned(hmpc::protocol::kWorstCaseFrameBits));
+  std::printf(
+      "\nJoint protocol bus load, classic CAN 1 Mbit/s, worst-case stuffing (%u bits per "
+      "frame), 8 leg joints and the torso IMU\n",
+      unsigned(hmpc::protocol::kWorstCaseFrameBits));
   std::printf("%-22s %-10s %12s %12s\n", "layout", "period", "robot bus", "I/O bus (HIL)");
   struct Layout {
     const char* name;
@@ -167,8 +169,9 @@ void print_bus_loads() {
                   100 * jp::bus_load(jp::Bus::kIo, 1'000'000, layout));
     }
   }
-  std::printf("The I/O bus stands for each board's own wiring (encoders, load cells, pressure "
-              "transducers, valve drivers); in the HIL it is one vcan, which has no bit rate.\n");
+  std::printf(
+      "The I/O bus stands for each board's own wiring (encoders, load cells, pressure "
+      "transducers, valve drivers); in the HIL it is one vcan, which has no bit rate.\n");
 }
 
 }  // namespace
@@ -178,11 +181,13 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks();
   print_bus_loads();
   const double joint = median(joint_us()), forearm = median(forearm_us());
-  std::printf("\nControl period on this host (median): joint board, 4 joints, 6 ms period: %.2f us; "
-              "forearm board, two-stage MPC, 4 ms period: %.1f us\n",
-              joint, forearm);
-  std::printf("joint board / forearm board control period: %.4fx (%.2f %% vs %.2f %% of its period)\n",
-              joint / forearm, 100 * joint / 6000, 100 * forearm / 4000);
+  std::printf(
+      "\nControl period on this host (median): joint board, 4 joints, 6 ms period: %.2f us; "
+      "forearm board, two-stage MPC, 4 ms period: %.1f us\n",
+      joint, forearm);
+  std::printf(
+      "joint board / forearm board control period: %.4fx (%.2f %% vs %.2f %% of its period)\n",
+      joint / forearm, 100 * joint / 6000, 100 * forearm / 4000);
   benchmark::Shutdown();
   return 0;
 }

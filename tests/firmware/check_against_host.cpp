@@ -166,8 +166,9 @@ int main(int argc, char** argv) {
               host.values.size(), kRelativeTolerance);
 
   for (const auto& [method, text] : instructions) {
-    std::printf("instructions per update (an MPC step, or a board's control period) on the target, %s:%s\n",
-                method.c_str(), text.c_str());
+    std::printf(
+        "instructions per update (an MPC step, or a board's control period) on the target, %s:%s\n",
+        method.c_str(), text.c_str());
     std::istringstream fields(text);
     std::string label;
     double max = 0, median = 0;

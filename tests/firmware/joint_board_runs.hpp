@@ -1,7 +1,7 @@
 // The hydraulic joint board application on the target, driving 4 joints: boot, zeroing, hold,
-// then torque references (a 2 Hz, 20 N·m sinusoid, phase-shifted per joint) streamed as CAN frames with the
-// host's heartbeat, and a plant inside the image (per joint the hydraulic actuator swinging a
-// hanging leg, models/hydraulic_pendulum.hpp, RK4 at 50 us) answering every tick with
+// then torque references (a 2 Hz, 20 N·m sinusoid, phase-shifted per joint) streamed as CAN frames
+// with the host's heartbeat, and a plant inside the image (per joint the hydraulic actuator
+// swinging a hanging leg, models/hydraulic_pendulum.hpp, RK4 at 50 us) answering every tick with
 // the I/O frames. One "update" is one 6 ms control period: the tick that runs the four torque
 // loops, timed from frame handling to the frames it queues. The board has no solver: its
 // updates carry no solver work, and each counts as one iteration.
@@ -87,8 +87,7 @@ void run_all(Observer& observer, Report& report) {
       if (plant_bus.encode(message, f) == proto::EncodeResult::kOk) board.on_frame(f);
     };
     const auto sensor = [&](std::size_t j) {
-      return std::array<float, 3>{float(plant[j].theta), float(plant[j].omega),
-                                  float(torque(j))};
+      return std::array<float, 3>{float(plant[j].theta), float(plant[j].omega), float(torque(j))};
     };
     const auto s0 = sensor(0), s1 = sensor(1), s2 = sensor(2), s3 = sensor(3);
     send_sensor(proto::JointSensor<0>{s0[0], s0[1], s0[2], 0});

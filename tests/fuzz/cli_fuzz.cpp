@@ -63,8 +63,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           if (o.board.interface.empty() || o.board.interface.size() >= IFNAMSIZ)
             fail("board", "bad interface name");
           if (o.w_v != 0 && !within(o.w_v, 1e-6, 1)) fail("board", "--w-v out of range");
-          if (o.board.duration_s != 0 &&
-              !within(o.board.duration_s, 1e-3, board::kMaxDurationS)) {
+          if (o.board.duration_s != 0 && !within(o.board.duration_s, 1e-3, board::kMaxDurationS)) {
             fail("board", "--duration out of range");
           }
           if (o.emulate_cortex_m7 && !o.board.lockstep)

@@ -12,9 +12,9 @@
 #include <thread>
 #include <vector>
 
-#include "hmpc/platform/linux/child_process.hpp"
 #include "hil_run.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 
 namespace {
 

@@ -22,8 +22,8 @@
 #include <thread>
 #include <vector>
 
-#include "hmpc/platform/linux/child_process.hpp"
 #include "forearm_hil_support.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 
 namespace {
 

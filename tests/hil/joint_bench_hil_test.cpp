@@ -42,7 +42,8 @@ std::string plant_trace(const std::string& log) {
   std::size_t at = 0;
   while (at < log.size()) {
     const std::size_t end = log.find('\n', at);
-    const std::string line = log.substr(at, end == std::string::npos ? std::string::npos : end - at);
+    const std::string line =
+        log.substr(at, end == std::string::npos ? std::string::npos : end - at);
     out += line.substr(0, line.rfind(',')) + '\n';
     if (end == std::string::npos) break;
     at = end + 1;
@@ -129,9 +130,9 @@ TEST(JointBench, LoadVelocityFeedbackHalvesTheErrorWhileTheLoadSwings) {
   for (const char* scale : {"1.2", "0.8"}) {
     const BenchRun lvf =
         run(std::string("lvf_") + scale, {"--believed-actuator-scale", scale}, rig, 4);
-    const BenchRun pid = run(std::string("pid_") + scale,
-                             {"--believed-actuator-scale", scale, "--no-load-velocity-feedback"},
-                             rig, 4);
+    const BenchRun pid =
+        run(std::string("pid_") + scale,
+            {"--believed-actuator-scale", scale, "--no-load-velocity-feedback"}, rig, 4);
     expect_clean(lvf);
     expect_clean(pid);
     const double e_lvf = number(lvf.rig, "rms_torque_error");

@@ -10,8 +10,9 @@ cd "$1"
 common=(--enable=warning,performance,portability --std=c++17 --inline-suppr --quiet -j 2
         --error-exitcode=1 --template='{file}:{line}: {severity} {id}: {message}'
         -I common/include -I host/include -I host/dds/include -I firmware/app
-        -I firmware/boards/linux -I hil/forearm)
+        -I firmware/boards/linux -I hil/forearm -I hil/joint_bench)
 cppcheck "${common[@]}" common firmware host hil
 cppcheck "${common[@]}" --library=googletest "-DTYPED_TEST(s,n)=void s##_##n()" \
-         "-DTYPED_TEST_SUITE(...)=" '-DHMPC_FOREARM_DBC="dbc"' tests
+         "-DTYPED_TEST_SUITE(...)=" '-DHMPC_FOREARM_DBC="dbc"' '-DHMPC_JOINT_DBC="dbc"' \
+         '-DHMPC_JOINT_BOARD_PROGRAM="board"' '-DHMPC_JOINT_BENCH_PROGRAM="bench"' tests
 echo "cppcheck: common, firmware, host, hil and tests clean"

@@ -6,8 +6,8 @@
 
 #include <cstdio>
 #include <fstream>
-#include <iterator>
 #include <iomanip>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>

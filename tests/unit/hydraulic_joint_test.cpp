@@ -3,13 +3,13 @@
 // of a blocked joint, and the load-velocity coupling's sign and size.
 #include "hmpc/models/hydraulic_joint.hpp"
 
-#include "hmpc/control/hydraulic_torque_tuning.hpp"
-#include "hmpc/models/hydraulic_pendulum.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
+
+#include "hmpc/control/hydraulic_torque_tuning.hpp"
+#include "hmpc/models/hydraulic_pendulum.hpp"
 
 namespace {
 
@@ -250,7 +250,8 @@ TEST(HydraulicTorqueTuning, NoLoadOperatingPointBalancesForceAndFlow) {
   const State s = hy::no_load_operating_point(p);
   EXPECT_NEAR(p.area_a * s.pressure_a - p.area_b * s.pressure_b, 0.0, 1e-9 * p.supply_pressure);
   EXPECT_NEAR((p.supply_pressure - s.pressure_a) / (p.area_a * p.area_a),
-              s.pressure_b / (p.area_b * p.area_b), 1e-6 * p.supply_pressure / (p.area_a * p.area_a));
+              s.pressure_b / (p.area_b * p.area_b),
+              1e-6 * p.supply_pressure / (p.area_a * p.area_a));
 }
 
 TEST(HydraulicTorqueTuning, GainsFollowTheStatedProcedure) {

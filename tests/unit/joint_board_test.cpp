@@ -4,6 +4,8 @@
 // pendulum, integrated by RK4 at 20 us, sends the I/O frames (encoder, load cell, chamber
 // pressures) before every tick and applies the ValveDrive the board sends back. Board frames
 // are decoded by a host-side Receiver, so every one of them must pass the protocol's checks.
+#include "joint_board.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,7 +15,6 @@
 #include <memory>
 
 #include "hmpc/models/hydraulic_pendulum.hpp"
-#include "joint_board.hpp"
 
 namespace {
 
@@ -331,7 +332,8 @@ TEST(JointBoard, OutOfRangeOrReplayedReferencesChangeNothing) {
   proto::TorqueReference big;
   big.tau = {50.0f, 0, 0, 0};
   ASSERT_EQ(rig.host().encode(big, replay), proto::EncodeResult::kOk);
-  replay.data[1] = static_cast<std::uint8_t>((replay.data[1] & 0xF0) | ((replay.data[1] - 1) & 0x0F));
+  replay.data[1] =
+      static_cast<std::uint8_t>((replay.data[1] & 0xF0) | ((replay.data[1] - 1) & 0x0F));
   replay.data[0] = proto::frame_checksum(replay);
   rig.deliver(replay);
   rig.run(6, {true, true, false});

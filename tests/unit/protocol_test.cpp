@@ -362,7 +362,8 @@ TYPED_TEST(ProtocolRoundTrip, EncodeRejectsOutOfRangeValues) {
       SetNthFloatOf<TypeParam> find{n, 0};
       TypeParam::visit(message, find);
       const auto& s = signal_spec(find.hit);
-      SetNthFloatOf<TypeParam> set{n, static_cast<float>(above ? s.max + s.factor : s.min - s.factor)};
+      SetNthFloatOf<TypeParam> set{n,
+                                   static_cast<float>(above ? s.max + s.factor : s.min - s.factor)};
       TypeParam::visit(message, set);
       Frame frame;
       frame.data.fill(0xAA);
@@ -376,8 +377,8 @@ TYPED_TEST(ProtocolRoundTrip, EncodeRejectsOutOfRangeValues) {
   Frame frame;
   EXPECT_EQ(encode(message, 0, frame), EncodeResult::kOutOfRange);
   message.counter = 0;
-  EXPECT_EQ(encode(message, MessageDescription<TypeParam>::kIds.max_node + 1, frame),
-            EncodeResult::kInvalidNode);
+  const hmpc::protocol::IdLayout& ids = MessageDescription<TypeParam>::kIds;
+  EXPECT_EQ(encode(message, ids.max_node + 1, frame), EncodeResult::kInvalidNode);
 }
 
 TEST(ProtocolEncode, RejectsUnknownEnumerators) {
@@ -658,10 +659,9 @@ TEST(JointProtocolLayout, TorqueReferenceBytes) {
   ASSERT_EQ(encode(reference, 1, frame), EncodeResult::kOk);
   EXPECT_EQ(frame.id, 0x221u);
   // 13-bit two's complement at 0.05 N.m from bit 12: 20, -20 (0x1FEC), 4000 (0xFA0), -1 (0x1FFF).
-  const std::uint64_t expected_payload = (std::uint64_t{7} << 8) | (std::uint64_t{20} << 12) |
-                                         (std::uint64_t{0x1FEC} << 25) |
-                                         (std::uint64_t{0xFA0} << 38) |
-                                         (std::uint64_t{0x1FFF} << 51);
+  const std::uint64_t expected_payload =
+      (std::uint64_t{7} << 8) | (std::uint64_t{20} << 12) | (std::uint64_t{0x1FEC} << 25) |
+      (std::uint64_t{0xFA0} << 38) | (std::uint64_t{0x1FFF} << 51);
   EXPECT_EQ(detail::payload_of(frame) & ~std::uint64_t{0xFF}, expected_payload);
   EXPECT_EQ(frame.data[kChecksumByte], frame_checksum(frame));
 }
@@ -688,8 +688,10 @@ TEST(JointProtocolRejects, EStopWithoutEngageAndUnknownModes) {
 TEST(JointProtocolRejects, OutOfRangeRawValues) {
   jp::Receiver receiver{1};
   const std::pair<jp::Signal, std::int64_t> cases[] = {
-      {jp::Signal::kTorqueReferenceTau0, 4001},  {jp::Signal::kTorqueReferenceTau3, -4001},
-      {jp::Signal::kTorqueGainsJoint, 4},        {jp::Signal::kTorqueGainsKp, 4001},
+      {jp::Signal::kTorqueReferenceTau0, 4001},
+      {jp::Signal::kTorqueReferenceTau3, -4001},
+      {jp::Signal::kTorqueGainsJoint, 4},
+      {jp::Signal::kTorqueGainsKp, 4001},
       {jp::Signal::kTorqueGainsLoadVelocity, -4001},
   };
   for (const auto& [signal, raw] : cases) {
@@ -729,14 +731,12 @@ TEST(JointProtocolCounters, EachJointSlotHasItsOwnSequence) {
 // 10 ms, BoardStatus every 20 ms, EncoderOffset every 100 ms; the IMU's 3 frames per period.
 TEST(JointProtocolBusLoad, RobotBusAtSixMillisecondsIsWithinFortyPercent) {
   const jp::BusLayout legs{2, 4, true, 6};
-  const double robot_frames_per_second =
-      2 * (6 * 1000.0 / 6 + 100 + 50 + 10) + 3 * 1000.0 / 6;
-  EXPECT_NEAR(jp::bus_load(jp::Bus::kRobot, 1'000'000, legs),
-              robot_frames_per_second * 135 / 1e6, 1e-12);
+  const double robot_frames_per_second = 2 * (6 * 1000.0 / 6 + 100 + 50 + 10) + 3 * 1000.0 / 6;
+  EXPECT_NEAR(jp::bus_load(jp::Bus::kRobot, 1'000'000, legs), robot_frames_per_second * 135 / 1e6,
+              1e-12);
   // The I/O bus: per board 4 JointSensor, 2 ChamberPressures and ValveDrive every 1 ms, and
   // one Sync for all.
-  EXPECT_NEAR(jp::bus_load(jp::Bus::kIo, 1'000'000, legs), (2 * 7 + 1) * 1000.0 * 135 / 1e6,
-              1e-12);
+  EXPECT_NEAR(jp::bus_load(jp::Bus::kIo, 1'000'000, legs), (2 * 7 + 1) * 1000.0 * 135 / 1e6, 1e-12);
   EXPECT_LE(jp::bus_load(jp::Bus::kRobot, 1'000'000, legs), 0.40);
   // Fewer joints per board drop their frames.
   const jp::BusLayout one_joint{1, 1, false, 6};

@@ -138,8 +138,8 @@ class BoardLoop {
     protocol::NodeId node = 0;
     if (io_ == nullptr || !protocol::identify(frame.id, type, node)) return robot_;
     const auto& spec = protocol::frame_spec(type);
-    const bool plant = spec.sender == protocol::Endpoint::kPlant ||
-                       spec.receiver == protocol::Endpoint::kPlant;
+    const bool plant =
+        spec.sender == protocol::Endpoint::kPlant || spec.receiver == protocol::Endpoint::kPlant;
     return plant ? *io_ : robot_;
   }
 
@@ -202,7 +202,7 @@ StopReason run_lockstep(typename Support::Board& board, BoardLoop<Support>& loop
       if (left <= 0) return StopReason::kDuration;
       timeout_ms = int(std::ceil(left * 1e3));
     }
-    if (::poll(fds, nfds_t(1 + buses), timeout_ms) < 0) {
+    if (::poll(fds, nfds_t(1) + nfds_t(buses), timeout_ms) < 0) {
       if (errno == EINTR) continue;
       return failure.system_error("poll");
     }

@@ -1,7 +1,7 @@
 // What a Linux board program does around its application, written once: stop signals, the
-// buses (this node's frames; the HIL's I/O bus where it is another interface), the --log, memory locking, the ready line, the loop (board_loop.hpp),
-// the final safe command and the stop report. The application's main parses its options,
-// builds its board and prints its summary.
+// buses (this node's frames; the HIL's I/O bus where it is another interface), the --log, memory
+// locking, the ready line, the loop (board_loop.hpp), the final safe command and the stop report.
+// The application's main parses its options, builds its board and prints its summary.
 #pragma once
 
 #include <signal.h>
@@ -33,8 +33,7 @@ struct RunResult {
 // log is written after `summary` (the application's key=value line) is printed.
 template <class Support, class Summary>
 int run_board(const char* program, const BoardOptions& options, typename Support::Board& board,
-              const typename Support::SafeMessage& safe, const char* mode_text,
-              Summary&& summary) {
+              const typename Support::SafeMessage& safe, const char* mode_text, Summary&& summary) {
   namespace heap_monitor = hmpc::platform::heap_monitor;
   std::string error;
   // SIGINT and SIGTERM are read from a descriptor the loop polls, so they end it between
@@ -47,7 +46,8 @@ int run_board(const char* program, const BoardOptions& options, typename Support
   // Only this node's frames: the board ignores the rest anyway.
   using Description = typename Support::Description;
   SocketCan robot, io;
-  const bool separate_io = !options.io_interface.empty() && options.io_interface != options.interface;
+  const bool separate_io =
+      !options.io_interface.empty() && options.io_interface != options.interface;
   if (!hmpc::platform::open_node_bus<Description>(robot, options.interface, options.node, true,
                                                   error) ||
       (separate_io && !hmpc::platform::open_node_bus<Description>(io, options.io_interface,

@@ -21,9 +21,7 @@ struct BoardOptions {
   std::string log_path;   // empty: no log
 };
 
-// Long enough for any run a test or an experiment needs, short enough that the tick count
-// (uint32 at 1 kHz) cannot wrap.
-inline constexpr double kMaxDurationS = 1e6;
+using cli::kMaxDurationS;
 // How much of the run --log keeps in memory (about 20 MB at 1 kHz).
 inline constexpr int kLogMinutes = 10;
 

@@ -39,7 +39,7 @@ struct ForearmSupport {
       "tick,wall_time_s,mode,faults,strategy,v_p,v_m,heartbeat_age,sensor_age";
   static Row log_row(const Board& b, float wall_time_s) {
     const auto& out = b.outputs();
-    return {b.ticks(),    wall_time_s,    b.mode(),          b.faults(),      b.strategy(),
+    return {b.ticks(),      wall_time_s,    b.mode(),          b.faults(),    b.strategy(),
             float(out.v_p), float(out.v_m), b.heartbeat_age(), b.sensor_age()};
   }
   static void write_row(std::FILE* file, const Row& r) {

@@ -18,10 +18,12 @@ struct Options {
 };
 
 inline void print_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: hmpc-forearm-board [--interface IFACE] [--io-interface IFACE] [--node N] [--lockstep]\n"
-               "                          [--emulate-target cortex-m7] [--w-v W] [--duration SECONDS]\n"
-               "                          [--log FILE] [--fail-solver-at SECONDS]\n");
+  std::fprintf(
+      out,
+      "usage: hmpc-forearm-board [--interface IFACE] [--io-interface IFACE] [--node N] "
+      "[--lockstep]\n"
+      "                          [--emulate-target cortex-m7] [--w-v W] [--duration SECONDS]\n"
+      "                          [--log FILE] [--fail-solver-at SECONDS]\n");
   print_board_options(out);
   std::fprintf(
       out,

@@ -37,8 +37,7 @@ struct JointSupport {
       "tick,wall_time_s,mode,faults,u_0,u_1,u_2,u_3,tau_ref_0,tau_ref_1,tau_ref_2,tau_ref_3,"
       "heartbeat_age,sensor_age";
   static Row log_row(const Board& b, float wall_time_s) {
-    Row r{b.ticks(), wall_time_s, b.mode(), b.faults(), {}, {}, b.heartbeat_age(),
-          b.sensor_age()};
+    Row r{b.ticks(), wall_time_s, b.mode(), b.faults(), {}, {}, b.heartbeat_age(), b.sensor_age()};
     for (std::size_t j = 0; j < proto::kMaxJointsPerBoard; ++j) {
       r.u[j] = float(b.valve_commands()[j]);
       r.tau[j] = float(b.applied_references()[j]);
@@ -49,9 +48,9 @@ struct JointSupport {
     std::fprintf(file, "%u,%.6f,%s,%u,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%.3f,%.3f,%u,%u\n", r.tick,
                  double(r.wall_time_s),
                  proto::value_name(proto::kBoardModeValues, std::uint32_t(r.mode)),
-                 unsigned(r.faults), double(r.u[0]), double(r.u[1]), double(r.u[2]),
-                 double(r.u[3]), double(r.tau[0]), double(r.tau[1]), double(r.tau[2]),
-                 double(r.tau[3]), r.heartbeat_age, r.sensor_age);
+                 unsigned(r.faults), double(r.u[0]), double(r.u[1]), double(r.u[2]), double(r.u[3]),
+                 double(r.tau[0]), double(r.tau[1]), double(r.tau[2]), double(r.tau[3]),
+                 r.heartbeat_age, r.sensor_age);
   }
   static bool work_due(const Board&) { return false; }  // the loops run inside the tick
   static void run_work(Board&) {}

@@ -12,7 +12,7 @@ namespace hmpc::linux_board {
 
 struct JointOptions {
   BoardOptions board;
-  long joints = 1;                    // 1..4
+  long joints = 1;  // 1..4
   long control_period_ms = joint_protocol::kDefaultControlPeriodMs;
   bool load_velocity_feedback = true;  // false: the torque loop is a plain PID
   // The actuator constants the board believes, as a multiple of the nominal ones (bulk modulus
@@ -22,11 +22,12 @@ struct JointOptions {
 };
 
 inline void print_joint_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: hmpc-joint-board [--interface IFACE] [--io-interface IFACE] [--node N] [--lockstep]\n"
-               "                        [--duration SECONDS] [--log FILE] [--joints N]\n"
-               "                        [--control-period-ms 1..6] [--no-load-velocity-feedback]\n"
-               "                        [--believed-actuator-scale S] [--stored-offsets]\n");
+  std::fprintf(
+      out,
+      "usage: hmpc-joint-board [--interface IFACE] [--io-interface IFACE] [--node N] [--lockstep]\n"
+      "                        [--duration SECONDS] [--log FILE] [--joints N]\n"
+      "                        [--control-period-ms 1..6] [--no-load-velocity-feedback]\n"
+      "                        [--believed-actuator-scale S] [--stored-offsets]\n");
   print_board_options(out);
   std::fprintf(
       out,

@@ -55,7 +55,8 @@ class TickLog {
     if (file_ == nullptr) return true;
     std::fprintf(file_, "%s\n", Support::kCsvHeader);
     const std::uint64_t first = dropped_rows();
-    for (std::uint64_t i = first; i < recorded_; ++i) Support::write_row(file_, rows_[i % rows_.size()]);
+    for (std::uint64_t i = first; i < recorded_; ++i)
+      Support::write_row(file_, rows_[i % rows_.size()]);
     const bool written = std::ferror(file_) == 0;
     const bool closed = std::fclose(file_) == 0;
     file_ = nullptr;

@@ -346,7 +346,8 @@ int main(int argc, char** argv) {
   }
 
   SocketCan can;
-  if (!hmpc::platform::open_node_bus<proto::Description>(can, options.interface, options.node, false, error)) {
+  if (!hmpc::platform::open_node_bus<proto::Description>(can, options.interface, options.node,
+                                                         false, error)) {
     std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
   }

@@ -42,7 +42,7 @@ struct Options {
   std::string log_path;
 };
 
-inline constexpr double kMaxDurationS = 1e6;
+using cli::kMaxDurationS;
 inline constexpr int kMaxSensorDelayMs = 100;
 
 inline void print_usage(std::FILE* out) {

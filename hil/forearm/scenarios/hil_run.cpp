@@ -9,8 +9,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "hmpc/platform/linux/child_process.hpp"
 #include "hmpc/models/forearm_problems.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 
 namespace hmpc::hil {
 namespace {

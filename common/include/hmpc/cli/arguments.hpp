@@ -36,6 +36,10 @@ inline std::string bad_value(const std::string& name, const std::string& what,
   return name + " must be " + what + ", got '" + text + "'";
 }
 
+// The longest --duration of the Linux programs: longer than any run a test or an experiment
+// needs, short enough that a tick count (uint32 at 1 kHz) cannot wrap.
+inline constexpr double kMaxDurationS = 1e6;
+
 enum class ParseOutcome { kRun, kHelp, kError };
 
 // What main() makes of a parse: kRun to go on; otherwise the program's exit status, after the

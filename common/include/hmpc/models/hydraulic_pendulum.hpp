@@ -55,9 +55,9 @@ PendulumState<Scalar> torque_free_rest(const JointActuatorParameters<Scalar>& ac
 // chambers' pressure dynamics are stiff: steps of 20 to 50 us). A clamped link (a torque test
 // stand) does not move; its actuator still does.
 template <typename Scalar>
-void step_pendulum(const JointActuatorParameters<Scalar>& actuator, const PendulumLoad<Scalar>& load,
-                   PendulumState<Scalar>& x, Scalar u, Scalar dt, int substeps,
-                   bool clamped = false) {
+void step_pendulum(const JointActuatorParameters<Scalar>& actuator,
+                   const PendulumLoad<Scalar>& load, PendulumState<Scalar>& x, Scalar u, Scalar dt,
+                   int substeps, bool clamped = false) {
   struct Rate {
     JointActuatorState<Scalar> a;
     Scalar theta, omega;
@@ -75,10 +75,10 @@ void step_pendulum(const JointActuatorParameters<Scalar>& actuator, const Pendul
   const Scalar h = dt / Scalar(substeps);
   for (int i = 0; i < substeps; ++i) {
     const Rate k1 = rate(x.actuator, x.theta, x.omega);
-    const Rate k2 = rate(moved(x.actuator, k1, h / 2), x.theta + h / 2 * k1.theta,
-                         x.omega + h / 2 * k1.omega);
-    const Rate k3 = rate(moved(x.actuator, k2, h / 2), x.theta + h / 2 * k2.theta,
-                         x.omega + h / 2 * k2.omega);
+    const Rate k2 =
+        rate(moved(x.actuator, k1, h / 2), x.theta + h / 2 * k1.theta, x.omega + h / 2 * k1.omega);
+    const Rate k3 =
+        rate(moved(x.actuator, k2, h / 2), x.theta + h / 2 * k2.theta, x.omega + h / 2 * k2.omega);
     const Rate k4 = rate(moved(x.actuator, k3, h), x.theta + h * k3.theta, x.omega + h * k3.omega);
     const auto mix = [h](Scalar a, Scalar b, Scalar c, Scalar d) {
       return h / Scalar(6) * (a + Scalar(2) * b + Scalar(2) * c + d);

@@ -208,7 +208,8 @@ constexpr const auto& signal_spec(Signal signal) {
 template <class FrameType, class P = DescriptionOf<FrameType>>
 constexpr std::uint32_t frame_id(FrameType type, NodeId node) {
   const auto& spec = frame_spec(type);
-  return spec.bus_wide ? spec.id_offset : P::kIds.base + P::kIds.node_stride * node + spec.id_offset;
+  return spec.bus_wide ? spec.id_offset
+                       : P::kIds.base + P::kIds.node_stride * node + spec.id_offset;
 }
 
 // The frame type and node an identifier belongs to (node 0 for a bus-wide frame); false for
@@ -391,7 +392,9 @@ inline constexpr std::array<CodecSpec, signal_count<P>()> kCodecSpecs = make_cod
 
 template <class Signal>
 constexpr const CodecSpec& codec_spec(Signal signal) {
-  return kCodecSpecs<DescriptionOf<Signal>>[index_of(signal)];
+  using P = DescriptionOf<Signal>;
+  const auto& specs = kCodecSpecs<P>;
+  return specs[index_of(signal)];
 }
 
 constexpr std::uint64_t payload_of(const Frame& frame) {
@@ -651,9 +654,10 @@ constexpr bool visits_exactly_its_signals() {
   VisitAudit<P> audit{};
   Message::visit(message, audit);
   if (!audit.consistent) return false;
-  for (const auto& s : P::kSignals) {
-    const bool expected = s.frame == Message::kType && s.kind != SignalKind::kChecksum;
-    if (audit.visited[index_of(s.signal)] != expected) return false;
+  for (std::size_t i = 0; i < signal_count<P>(); ++i) {
+    const bool expected =
+        P::kSignals[i].frame == Message::kType && P::kSignals[i].kind != SignalKind::kChecksum;
+    if (audit.visited[i] != expected) return false;
   }
   return true;
 }

@@ -18,30 +18,30 @@
 namespace hmpc::forearm_protocol {
 
 using protocol::ByteOrder;
+using protocol::crc8_autosar;
+using protocol::decode;
 using protocol::DecodeResult;
+using protocol::encode;
 using protocol::EncodeResult;
 using protocol::Endpoint;
 using protocol::EnumValue;
 using protocol::Frame;
-using protocol::kChecksumByte;
-using protocol::kCounterModulo;
-using protocol::kMaxCounterAdvance;
-using protocol::kWorstCaseFrameBits;
-using protocol::NodeId;
-using protocol::RejectCounters;
-using protocol::SignalKind;
-using protocol::crc8_autosar;
-using protocol::decode;
-using protocol::encode;
 using protocol::frame_checksum;
 using protocol::frame_id;
 using protocol::frame_spec;
 using protocol::identify;
 using protocol::index_of;
+using protocol::kChecksumByte;
+using protocol::kCounterModulo;
+using protocol::kMaxCounterAdvance;
+using protocol::kWorstCaseFrameBits;
+using protocol::NodeId;
 using protocol::raw_max;
 using protocol::raw_min;
 using protocol::raw_of;
+using protocol::RejectCounters;
 using protocol::signal_spec;
+using protocol::SignalKind;
 using protocol::to_string;
 using protocol::value_name;
 using protocol::value_of;
@@ -140,10 +140,8 @@ inline constexpr EnumValue kSolveStatusValues[] = {
     {0, "converged"},     {1, "iteration_cap"},     {2, "budget_exhausted"}, {3, "stalled"},
     {4, "invalid_input"}, {5, "numerical_failure"}, {6, "no_solve"}};
 
-
 // ---------------------------------------------------------------------------------------
 // Signals
-
 
 // clang-format off
 enum class Signal : std::uint8_t {
@@ -170,7 +168,6 @@ enum class Signal : std::uint8_t {
 inline constexpr std::size_t kSignalCount = 55;
 
 using SignalSpec = protocol::SignalSpec<Signal, FrameType>;
-
 
 // Resolution is the factor. Ranges: theta [-pi, pi] rad (to the next grid step), theta_dot
 // [-20, 20] rad/s, P [0, 0.8] MPa, v_p [0, 5] V, v_m [-5, 5] V (the thesis's input limits,
@@ -421,7 +418,6 @@ struct Sync {
   }
 };
 
-
 // ---------------------------------------------------------------------------------------
 // The description the codec reads, and the codec over it
 
@@ -435,9 +431,9 @@ struct Description {
 constexpr Description protocol_of(FrameType) { return {}; }
 constexpr Description protocol_of(Signal) { return {}; }
 
-using Messages = protocol::MessageList<ModeCommand, SensorSample, ActuatorCommand, TrajectorySample,
-                                       BoardStatus, JointState, ActuatorOutputs, SolveTelemetry,
-                                       Gains, Sync>;
+using Messages =
+    protocol::MessageList<ModeCommand, SensorSample, ActuatorCommand, TrajectorySample, BoardStatus,
+                          JointState, ActuatorOutputs, SolveTelemetry, Gains, Sync>;
 static_assert(protocol::is_well_formed<Description>(Messages{}),
               "tables or messages break a rule of codec.hpp (see its compile-time checks)");
 

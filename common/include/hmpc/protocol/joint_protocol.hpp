@@ -34,25 +34,25 @@
 namespace hmpc::joint_protocol {
 
 using protocol::ByteOrder;
+using protocol::decode;
 using protocol::DecodeResult;
+using protocol::encode;
 using protocol::EncodeResult;
 using protocol::Endpoint;
 using protocol::EnumValue;
 using protocol::Frame;
-using protocol::kChecksumByte;
-using protocol::NodeId;
-using protocol::RejectCounters;
-using protocol::SignalKind;
-using protocol::decode;
-using protocol::encode;
 using protocol::frame_checksum;
 using protocol::frame_id;
 using protocol::frame_spec;
 using protocol::identify;
 using protocol::index_of;
+using protocol::kChecksumByte;
+using protocol::NodeId;
 using protocol::raw_max;
 using protocol::raw_min;
+using protocol::RejectCounters;
 using protocol::signal_spec;
+using protocol::SignalKind;
 using protocol::to_string;
 using protocol::value_name;
 using protocol::value_of;
@@ -78,13 +78,13 @@ enum class FrameType : std::uint8_t {
   kJointState1,
   kJointState2,
   kJointState3,
-  kValveCommands,   // board -> host: the valve command of each joint
-  kBoardStatus,     // board -> host: mode, fault bits, joints, protocol version, counters
-  kTorqueGains,     // host -> board: one joint's torque loop gains
-  kHoldGains,       // host -> board: one joint's position hold gains
-  kEncoderOffset,   // board -> host: one joint's encoder offset, joints in turn
-  kSync,            // plant -> boards, I/O bus, bus-wide: lock-step clock tick
-  kJointSensor0,    // plant -> board, I/O bus: encoder, velocity, load cell of joint 0
+  kValveCommands,  // board -> host: the valve command of each joint
+  kBoardStatus,    // board -> host: mode, fault bits, joints, protocol version, counters
+  kTorqueGains,    // host -> board: one joint's torque loop gains
+  kHoldGains,      // host -> board: one joint's position hold gains
+  kEncoderOffset,  // board -> host: one joint's encoder offset, joints in turn
+  kSync,           // plant -> boards, I/O bus, bus-wide: lock-step clock tick
+  kJointSensor0,   // plant -> board, I/O bus: encoder, velocity, load cell of joint 0
   kJointSensor1,
   kJointSensor2,
   kJointSensor3,
@@ -134,10 +134,14 @@ constexpr FrameType joint_frame(FrameType first, std::size_t joint) {
 // with n joints sends and receives a per-joint frame only if that joint is below n.
 constexpr std::size_t first_joint_of(FrameType type) {
   switch (type) {
-    case FrameType::kJointState0: case FrameType::kJointSensor0: return 0;
-    case FrameType::kJointState1: case FrameType::kJointSensor1: return 1;
-    case FrameType::kJointState2: case FrameType::kJointSensor2: return 2;
-    case FrameType::kJointState3: case FrameType::kJointSensor3: return 3;
+    case FrameType::kJointState0:
+    case FrameType::kJointSensor0: return 0;
+    case FrameType::kJointState1:
+    case FrameType::kJointSensor1: return 1;
+    case FrameType::kJointState2:
+    case FrameType::kJointSensor2: return 2;
+    case FrameType::kJointState3:
+    case FrameType::kJointSensor3: return 3;
     case FrameType::kChamberPressures01: return 0;
     case FrameType::kChamberPressures23: return 2;
     default: return kMaxJointsPerBoard;
@@ -411,8 +415,8 @@ struct EStop {
 struct ModeCommand {
   static constexpr FrameType kType = FrameType::kModeCommand;
   RequestedMode mode = RequestedMode::kIdle;
-  bool clear_faults = false;   // clear latched faults and a latched E-stop (honoured in idle)
-  bool zero_encoders = false;  // take the present angles as the zero posture (in idle)
+  bool clear_faults = false;       // clear latched faults and a latched E-stop (honoured in idle)
+  bool zero_encoders = false;      // take the present angles as the zero posture (in idle)
   std::uint32_t host_time_us = 0;  // host clock, us modulo 2^32
   std::uint8_t counter = 0;
   template <class Self, class Visitor>
@@ -586,7 +590,7 @@ struct HoldGains {
 struct EncoderOffset {
   static constexpr FrameType kType = FrameType::kEncoderOffset;
   std::uint8_t joint = 0;
-  float offset = 0;   // rad
+  float offset = 0;     // rad
   bool zeroed = false;  // the offset was taken since boot (not the stored default)
   std::uint8_t counter = 0;
   template <class Self, class Visitor>
@@ -645,13 +649,11 @@ struct Description {
 constexpr Description protocol_of(FrameType) { return {}; }
 constexpr Description protocol_of(Signal) { return {}; }
 
-using Messages =
-    protocol::MessageList<EStop, ModeCommand, TorqueReference, ImuAngularVelocity,
-                          ImuLinearAcceleration, ImuAttitude, JointState<0>, JointState<1>,
-                          JointState<2>, JointState<3>, ValveCommands, BoardStatus, TorqueGains,
-                          HoldGains, EncoderOffset, Sync, JointSensor<0>, JointSensor<1>,
-                          JointSensor<2>, JointSensor<3>, ChamberPressures01, ChamberPressures23,
-                          ValveDrive>;
+using Messages = protocol::MessageList<
+    EStop, ModeCommand, TorqueReference, ImuAngularVelocity, ImuLinearAcceleration, ImuAttitude,
+    JointState<0>, JointState<1>, JointState<2>, JointState<3>, ValveCommands, BoardStatus,
+    TorqueGains, HoldGains, EncoderOffset, Sync, JointSensor<0>, JointSensor<1>, JointSensor<2>,
+    JointSensor<3>, ChamberPressures01, ChamberPressures23, ValveDrive>;
 static_assert(protocol::is_well_formed<Description>(Messages{}),
               "tables or messages break a rule of codec.hpp (see its compile-time checks)");
 
@@ -677,9 +679,8 @@ constexpr double bus_load(Bus bus, std::uint32_t bitrate_bps, const BusLayout& l
   double bits_per_second = 0;
   for (const FrameSpec& frame : kFrames) {
     if (frame.cycle_time_ms == 0 || on_io_bus(frame) != (bus == Bus::kIo)) continue;
-    const double period = frame.cycle_time_ms == kDefaultControlPeriodMs
-                              ? layout.control_period_ms
-                              : frame.cycle_time_ms;
+    const double period = frame.cycle_time_ms == kDefaultControlPeriodMs ? layout.control_period_ms
+                                                                         : frame.cycle_time_ms;
     double copies = layout.boards;
     if (frame.sender == Endpoint::kImu) copies = layout.imu ? 1 : 0;
     if (frame.bus_wide) copies = 1;
