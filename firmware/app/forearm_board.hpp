@@ -56,8 +56,8 @@ struct ForearmBoardProtocol {
 template <typename Scalar>
 struct BoardConfig {
   proto::NodeId node = 0;
-  // The host sends ModeCommand every 10 ms (protocol); two missed periods trip the watchdog.
-  int heartbeat_timeout_ticks = 20;
+  // Two missed ModeCommand periods (the protocol's 10 ms) trip the watchdog.
+  int heartbeat_timeout_ticks = 2 * proto::frame_spec(proto::FrameType::kModeCommand).cycle_time_ms;
   // Sensors arrive every 1 ms; five missed readings are a sensor fault.
   int sensor_timeout_ticks = 5;
   // Consecutive failed or overrun MPC steps before falling back to hold.
@@ -136,6 +136,12 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   using WallClock = double (*)();
 
   static constexpr int kTicksPerMpcStep = 4;  // 1 kHz I/O, 4 ms MPC (Sec. 3.3)
+  // The telemetry of each MPC step goes at the period the protocol states for it.
+  static_assert(
+      proto::frame_spec(proto::FrameType::kSolveTelemetry).cycle_time_ms == kTicksPerMpcStep &&
+          proto::frame_spec(proto::FrameType::kJointState).cycle_time_ms == kTicksPerMpcStep &&
+          proto::frame_spec(proto::FrameType::kActuatorOutputs).cycle_time_ms == kTicksPerMpcStep,
+      "the protocol's telemetry periods are the MPC's");
   static constexpr Scalar kTick = Scalar(0.001);
 
   // The strategies point at target_: the board must stay where it was built.
@@ -425,7 +431,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       }
       this->send(telemetry_);
     }
-    if (ticks % 10 == 0) {
+    if (ticks % proto::frame_spec(proto::FrameType::kBoardStatus).cycle_time_ms == 0) {
       proto::BoardStatus s;
       s.mode = this->mode();
       s.faults = this->faults();

@@ -82,9 +82,10 @@ template <typename Scalar>
 struct JointBoardConfig {
   joint_proto::NodeId node = 0;
   std::size_t joints = joint_proto::kMaxJointsPerBoard;             // 1..4
-  int control_period_ticks = joint_proto::kDefaultControlPeriodMs;  // 6 ms, or 1
+  int control_period_ticks = joint_proto::kDefaultControlPeriodMs;  // 6 ms, or 1..5
   // ModeCommand comes every 10 ms: 30 ms (two lost in a row, five 6 ms control periods) trips.
-  int heartbeat_timeout_ticks = 30;
+  int heartbeat_timeout_ticks =
+      3 * joint_proto::frame_spec(joint_proto::FrameType::kModeCommand).cycle_time_ms;
   // Sensors come every 1 ms: five lost in a row are a sensor fault.
   int sensor_timeout_ticks = 5;
   // Torque references come every control period: three periods without one are stale.
