@@ -6,8 +6,9 @@
 // and scale factors for plant-model mismatch.
 //
 // Simbody stays behind this interface (pimpl), so that only simbody_forearm.cpp needs Simbody's
-// headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes when code including it is built
-// with NDEBUG: Simbody's GitHub issue 701).
+// headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes when code
+// including its headers is built with NDEBUG and the library without it: their inline code
+// then disagrees).
 #pragma once
 
 #include <cstdint>
