@@ -117,6 +117,7 @@ class BoardRuntime {
   std::uint32_t heartbeat_age() const { return ticks_ - last_heartbeat_tick_; }
   std::uint32_t sensor_age() const { return ticks_ - last_sensor_tick_; }
   std::uint32_t dropped_frames() const { return dropped_frames_; }
+  std::uint32_t syncs() const { return runtime_counters_.syncs; }
 
  protected:
   Application& application() { return static_cast<Application&>(*this); }

@@ -185,7 +185,10 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
       : Runtime(RuntimeConfig{config.node, config.heartbeat_timeout_ticks,
                               config.sensor_timeout_ticks}),
         config_(config) {
-    for (std::size_t j = 0; j < kMaxJoints; ++j) offset_[j] = config.joint[j].encoder_offset;
+    for (std::size_t j = 0; j < kMaxJoints; ++j) {
+      offset_[j] = config.joint[j].encoder_offset;
+      no_load_ratio_[j] = hydraulic::no_load_velocity_ratio(config.joint[j].actuator);
+    }
   }
 
   using Runtime::on_frame;
@@ -348,12 +351,15 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
       // The rate limit: the applied reference moves at most torque_rate_limit * T per step.
       const Scalar step = c.torque_rate_limit * period;
       applied_[j] = clamp(wanted, applied_[j] - step, applied_[j] + step);
-      // The load-velocity gain at this operating point: the configured (no-load) one scaled by
-      // the model's k_v / k_q here, from the measured pressures, angle and valve side.
-      auto loop = c.torque_loop;
+      // The load-velocity term at this operating point: the configured (no-load) gain times the
+      // model's k_v / k_q here over its no-load value, from the measured pressures, angle and
+      // valve side. The factor scales the velocity the loop is given, which only that term
+      // uses, so the configured gain stays as set.
       const hydraulic::JointActuatorState<Scalar> here{valve_[j], m.pressure_a, m.pressure_b};
-      loop.load_velocity_gain *= hydraulic::load_velocity_schedule(c.actuator, here, m.theta);
-      valve_[j] = Pid::update(loop, torque_state_[j], applied_[j], m.tau, m.theta_dot, period);
+      const Scalar schedule =
+          hydraulic::load_velocity_schedule(c.actuator, no_load_ratio_[j], here, m.theta);
+      valve_[j] = Pid::update(c.torque_loop, torque_state_[j], applied_[j], m.tau,
+                              schedule * m.theta_dot, period);
     }
   }
 
@@ -525,6 +531,7 @@ class JointBoard : public BoardRuntime<JointBoard<Scalar>, JointBoardProtocol> {
   std::array<JointMeasurement<Scalar>, kMaxJoints> measured_{};
   std::array<Scalar, kMaxJoints> encoder_{};
   std::array<Scalar, kMaxJoints> offset_{};
+  std::array<Scalar, kMaxJoints> no_load_ratio_{};  // k_v / k_q of each believed actuator
   bool zeroed_ = false;
   std::array<std::uint32_t, kMaxJoints> joint_sensor_tick_{};
   std::array<std::uint32_t, kMaxJoints> pressure_tick_{};

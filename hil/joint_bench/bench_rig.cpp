@@ -115,15 +115,8 @@ void print_usage(std::FILE* out) {
 
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
   hmpc::cli::OptionParser p;
-  const auto interface = [](const char* name, std::string& target) {
-    return [name, &target](const std::string& v) -> std::string {
-      if (v.empty() || v.size() >= 16) return hmpc::cli::bad_value(name, "an interface name", v);
-      target = v;
-      return {};
-    };
-  };
-  p.text("--robot-interface", interface("--robot-interface", o.robot_interface));
-  p.text("--io-interface", interface("--io-interface", o.io_interface));
+  p.interface("--robot-interface", o.robot_interface);
+  p.interface("--io-interface", o.io_interface);
   p.integer("--node", 0, proto::kIds.max_node, o.node);
   p.flag("--lockstep", o.lockstep);
   p.number("--duration", 0.01, 3600, "seconds in [0.01, 3600]", o.duration_s);

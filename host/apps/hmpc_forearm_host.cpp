@@ -101,12 +101,7 @@ void print_usage(std::FILE* out) {
 
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
   hmpc::cli::OptionParser p;
-  p.text("--interface", [&](const std::string& v) -> std::string {
-    if (v.empty() || v.size() >= 16)
-      return hmpc::cli::bad_value("--interface", "a name of 1..15 characters", v);
-    o.interface = v;
-    return {};
-  });
+  p.interface("--interface", o.interface);
   p.integer("--node", 0, proto::kMaxNodeId, o.node);
   p.flag("--lockstep", o.lockstep);
   p.number("--duration", 1e-3, 1e6, "a number of seconds in [0.001, 1e6]", o.duration_s);

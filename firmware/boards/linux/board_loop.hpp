@@ -96,9 +96,9 @@ class BoardLoop {
   bool deliver(const CanFrame& can_frame) {
     protocol::Frame frame;
     if (!to_protocol_frame(can_frame, frame)) return false;
-    const std::uint32_t syncs_before = board_.counters().syncs;
+    const std::uint32_t syncs_before = board_.syncs();
     board_.on_frame(frame);
-    return board_.counters().syncs != syncs_before;
+    return board_.syncs() != syncs_before;
   }
 
   // One 1 kHz tick, its log row and its frames; true when the application's background work

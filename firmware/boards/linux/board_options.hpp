@@ -2,8 +2,6 @@
 // main). Parsed once at start-up (it may allocate).
 #pragma once
 
-#include <net/if.h>
-
 #include <cstdio>
 #include <string>
 
@@ -45,20 +43,8 @@ inline void print_board_options(std::FILE* out) {
 
 inline void add_board_options(cli::OptionParser& parser, BoardOptions& options,
                               protocol::NodeId max_node) {
-  parser.text("--interface", [&options](const std::string& v) -> std::string {
-    if (v.empty() || v.size() >= IFNAMSIZ)
-      return cli::bad_value("--interface",
-                            "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
-    options.interface = v;
-    return {};
-  });
-  parser.text("--io-interface", [&options](const std::string& v) -> std::string {
-    if (v.empty() || v.size() >= IFNAMSIZ)
-      return cli::bad_value("--io-interface",
-                            "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
-    options.io_interface = v;
-    return {};
-  });
+  parser.interface("--interface", options.interface);
+  parser.interface("--io-interface", options.io_interface);
   parser.integer("--node", 0, max_node, options.node);
   parser.flag("--lockstep", options.lockstep);
   parser.number("--duration", 1e-3, kMaxDurationS, "a number of seconds in [0.001, 1e6]",

@@ -1,8 +1,6 @@
 // Command line of hmpc-forearm-plant. Parsed once at start-up.
 #pragma once
 
-#include <net/if.h>
-
 #include <cstdio>
 #include <string>
 
@@ -88,13 +86,7 @@ using cli::ParseOutcome;
 
 inline ParseOutcome parse_options(int argc, char** argv, Options& o, std::string& error) {
   cli::OptionParser parser;
-  parser.text("--interface", [&](const std::string& v) -> std::string {
-    if (v.empty() || v.size() >= IFNAMSIZ)
-      return cli::bad_value("--interface",
-                            "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
-    o.interface = v;
-    return {};
-  });
+  parser.interface("--interface", o.interface);
   parser.integer("--node", 0, forearm_protocol::kMaxNodeId, o.node);
   parser.flag("--lockstep", o.lockstep);
   parser.number("--duration", 1e-3, kMaxDurationS, "a number of seconds in [0.001, 1e6]",

@@ -3,6 +3,8 @@
 // errors naming the option, never a silent 0 or inf. Start-up only (it allocates).
 #pragma once
 
+#include <net/if.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -84,6 +86,16 @@ class OptionParser {
       target = Integer(value);
       return true;
     };
+  }
+  // A network interface name (can0, vcan1): 1 to IFNAMSIZ - 1 characters, as the kernel takes.
+  void interface(const std::string& name, std::string& target) {
+    text(name, [name, &target](const std::string& v) -> std::string {
+      if (v.empty() || v.size() >= IFNAMSIZ) {
+        return bad_value(name, "a name of 1.." + std::to_string(IFNAMSIZ - 1) + " characters", v);
+      }
+      target = v;
+      return {};
+    });
   }
   // Any other value: `accept` stores it or says what is wrong (a non-empty message).
   void text(const std::string& name, std::function<std::string(const std::string&)> accept) {

@@ -72,19 +72,32 @@ TorqueLoopGains<Scalar> tune_torque_loop(const JointActuatorParameters<Scalar>& 
   return gains;
 }
 
+// k_v / k_q at the no-load operating point: what load_velocity_schedule() divides by, fixed for
+// a given actuator, so a controller computes it once.
+template <typename Scalar>
+Scalar no_load_velocity_ratio(const JointActuatorParameters<Scalar>& believed) {
+  const TorqueRateGains<Scalar> k =
+      torque_rate_gains(believed, no_load_operating_point(believed), Scalar(0));
+  return k.load_velocity / k.valve;
+}
+
 // The factor k_lv(x) / k_lv(no load) of the load-velocity gain at the measured operating point
 // (chamber pressures, joint angle, the side of the valve's last command), from the believed
-// constants; bounded to [0, 2] so that a pressure at the supply's (where the open land's flow,
-// and k_q with it, vanishes) cannot make the gain unbounded.
+// constants and their no_load_velocity_ratio(); bounded to [0, 2] so that a pressure at the
+// supply's (where the open land's flow, and k_q with it, vanishes) cannot make the gain
+// unbounded.
+template <typename Scalar>
+Scalar load_velocity_schedule(const JointActuatorParameters<Scalar>& believed, Scalar no_load_ratio,
+                              const JointActuatorState<Scalar>& measured, Scalar theta) {
+  const TorqueRateGains<Scalar> here = torque_rate_gains(believed, measured, theta);
+  if (!(here.valve > Scalar(0))) return Scalar(2);
+  const Scalar factor = (here.load_velocity / here.valve) / no_load_ratio;
+  return factor < Scalar(0) ? Scalar(0) : (factor > Scalar(2) ? Scalar(2) : factor);
+}
 template <typename Scalar>
 Scalar load_velocity_schedule(const JointActuatorParameters<Scalar>& believed,
                               const JointActuatorState<Scalar>& measured, Scalar theta) {
-  const TorqueRateGains<Scalar> nominal =
-      torque_rate_gains(believed, no_load_operating_point(believed), Scalar(0));
-  const TorqueRateGains<Scalar> here = torque_rate_gains(believed, measured, theta);
-  if (!(here.valve > Scalar(0))) return Scalar(2);
-  const Scalar factor = (here.load_velocity / here.valve) / (nominal.load_velocity / nominal.valve);
-  return factor < Scalar(0) ? Scalar(0) : (factor > Scalar(2) ? Scalar(2) : factor);
+  return load_velocity_schedule(believed, no_load_velocity_ratio(believed), measured, theta);
 }
 
 }  // namespace hmpc::hydraulic
