@@ -1,5 +1,5 @@
-// The humanoid of host/humanoid (same bodies, masses, centres of mass, inertias, joint axes and
-// gravity) built in Simbody: the reference our own dynamics is validated against, and later the
+// The humanoid of common/include/hmpc/humanoid (same bodies, masses, centres of mass, inertias,
+// joint axes and gravity) built in Simbody: the reference our own dynamics is validated against, and later the
 // HIL plant. Simbody stays behind this interface (pimpl) so that only simbody_humanoid.cpp
 // needs Simbody's headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes when code
 // including its headers is built with NDEBUG and the library without it: their inline code
@@ -48,7 +48,6 @@
 
 #include "hmpc/humanoid/contact.hpp"
 #include "hmpc/humanoid/model.hpp"
-#include "hmpc/humanoid/step.hpp"
 
 namespace hmpc::hil {
 
@@ -90,8 +89,9 @@ class BasicSimbodyHumanoid {
   Velocity forward_dynamics(const Velocity& tau);
   double kinetic_energy();
 
-  // Advances the state by dt under gravity, the contact and the joint torques tau held over
-  // dt (zero-order hold, as StepMap::step), with Simbody's error-controlled Runge-Kutta-Merson.
+  // Advances the state by dt under gravity, the contact and the joint torques tau held over dt
+  // (zero-order hold, as the host MPC's step map), with Simbody's error-controlled
+  // Runge-Kutta-Merson.
   void step(const JointVector& tau, double dt);
   // Ground force on each sole point at the current state (world), indexed as ContactModel's
   // points (0-3 left foot, 4-7 right); zero without contact.

@@ -67,12 +67,6 @@
 
 namespace hmpc::humanoid {
 
-template <int ArmJoints>
-struct BasicState {
-  BasicConfiguration<ArmJoints> q;
-  BasicVelocity<ArmJoints> v;
-};
-
 // The end stops' torque on one joint at angle q and rate v (Parameters::stop_*), with the
 // slopes the step map treats implicitly: stiffness = -d(spring torque)/dq >= 0 and
 // damping = -d(torque)/dv >= 0.

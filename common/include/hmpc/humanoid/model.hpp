@@ -62,6 +62,13 @@ using BasicJointVector = Eigen::Matrix<double, Dimensions<A>::kJoints, 1>;
 template <int A>
 using BasicMassMatrix = Eigen::Matrix<double, Dimensions<A>::kDofs, Dimensions<A>::kDofs>;
 
+// The robot's state x = (q, v) (thesis Sec. 2.6.2: n = 29, or 31 with the arm).
+template <int ArmJoints>
+struct BasicState {
+  BasicConfiguration<ArmJoints> q;
+  BasicVelocity<ArmJoints> v;
+};
+
 // Body i > 0 is moved by joint i - 1 (velocity index kBaseDofs + i - 1); body 0 is the torso.
 // Leg bodies are numbered leg * 4 + 1 + LegJoint (left leg 0, right leg 1), then the arm.
 struct Body {
