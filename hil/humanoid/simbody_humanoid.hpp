@@ -1,9 +1,9 @@
 // The humanoid of common/include/hmpc/humanoid (same bodies, masses, centres of mass, inertias,
-// joint axes and gravity) built in Simbody: the reference our own dynamics is validated against, and later the
-// HIL plant. Simbody stays behind this interface (pimpl) so that only simbody_humanoid.cpp
-// needs Simbody's headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes when code
-// including its headers is built with NDEBUG and the library without it: their inline code
-// then disagrees).
+// joint axes and gravity) built in Simbody: the reference our own dynamics is validated against,
+// and later the HIL plant. Simbody stays behind this interface (pimpl) so that only
+// simbody_humanoid.cpp needs Simbody's headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes
+// when code including its headers is built with NDEBUG and the library without it: their inline
+// code then disagrees).
 //
 // Coordinate mapping, ours -> Simbody (all conversions happen here; callers use ours):
 //  - Torso: MobilizedBody::Free, q = (quaternion w x y z, p) and u = (omega, v_origin), both
