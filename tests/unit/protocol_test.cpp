@@ -651,6 +651,37 @@ TEST(JointProtocolIds, BusWideFramesAndNodeStride) {
   }
 }
 
+// What a node's acceptance filter is set from: exactly the identifiers identify() gives that
+// node (its own block and the bus-wide frames), none of another node's.
+TEST(JointProtocolIds, AcceptedIdsAreTheNodesBlockAndTheBusWideFrames) {
+  const hmpc::protocol::AcceptedIds accepted = hmpc::protocol::accepted_ids<jp::Description>(3);
+  ASSERT_EQ(accepted.count, 3u);
+  EXPECT_EQ(accepted.ranges[0].first, 0x260u);
+  EXPECT_EQ(accepted.ranges[0].last, 0x27Fu);
+  EXPECT_EQ(accepted.ranges[1].first, 0x080u);
+  EXPECT_EQ(accepted.ranges[2].first, 0x081u);
+  const auto accepts = [&](std::uint32_t id) {
+    for (std::size_t i = 0; i < accepted.count; ++i) {
+      if (id >= accepted.ranges[i].first && id <= accepted.ranges[i].last) return true;
+    }
+    return false;
+  };
+  for (std::uint32_t id = 0; id < 0x800; ++id) {
+    jp::FrameType type{};
+    NodeId node = 0;
+    const bool ours = identify(id, type, node) && (node == 3 || jp::frame_spec(type).bus_wide);
+    if (ours) {
+      EXPECT_TRUE(accepts(id)) << std::hex << id;
+    } else if (identify(id, type, node)) {
+      EXPECT_FALSE(accepts(id)) << std::hex << id;  // another node's frame
+    }
+  }
+  const hmpc::protocol::AcceptedIds forearm = hmpc::protocol::accepted_ids<Description>(2);
+  ASSERT_EQ(forearm.count, 1u);  // the forearm protocol has no bus-wide frame
+  EXPECT_EQ(forearm.ranges[0].first, 0x120u);
+  EXPECT_EQ(forearm.ranges[0].last, 0x12Fu);
+}
+
 TEST(JointProtocolLayout, TorqueReferenceBytes) {
   jp::TorqueReference reference;
   reference.tau = {1.0f, -1.0f, 200.0f, -0.05f};

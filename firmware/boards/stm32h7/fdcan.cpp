@@ -106,6 +106,16 @@ constexpr std::uint32_t standard_range_filter(std::uint32_t first, std::uint32_t
   return (0u << 30) | (1u << 27) | (first << 16) | last;
 }
 
+constexpr bool filters_valid(const protocol::AcceptedIds& accept) {
+  if (accept.count == 0 || accept.count > MessageRam::kStandardFilters) return false;
+  for (std::size_t i = 0; i < accept.count; ++i) {
+    if (accept.ranges[i].first > accept.ranges[i].last || accept.ranges[i].last > 0x7FFu) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // INIT crosses into the kernel clock domain: a write is visible only once synchronised, and
 // the next write must wait for it (RM0433, FDCAN_CCCR.INIT).
 constexpr std::uint32_t kInitPollLimit = 100'000;
@@ -141,7 +151,7 @@ constexpr std::uint32_t kFdcan1AlternateFunction = 9;
 Fdcan::InitResult Fdcan::init(const FdcanConfig& config) {
   if (!config.timing.valid()) return InitResult::kBadTiming;
   if (!is_fdcan1_pin_pair(config.rx, config.tx)) return InitResult::kBadPins;
-  if (config.node > forearm_protocol::kMaxNodeId) return InitResult::kBadNode;
+  if (!filters_valid(config.accept)) return InitResult::kBadFilters;
 
   // Kernel clock, bus clock, then a reset pulse so no state of an earlier run survives.
   Rcc& rcc = rcc_regs();
@@ -168,13 +178,16 @@ Fdcan::InitResult Fdcan::init(const FdcanConfig& config) {
 
   for (std::uint32_t offset = 0; offset < MessageRam::kEndOffset; offset += 4)
     *message_ram_word(offset) = 0;
-  const std::uint32_t first_id =
-      forearm_protocol::kBaseId + forearm_protocol::kNodeIdStride * config.node;
-  *message_ram_word(MessageRam::kStandardFilterOffset) =
-      standard_range_filter(first_id, first_id + forearm_protocol::kNodeIdStride - 1);
+  for (std::size_t i = 0; i < config.accept.count; ++i) {
+    const protocol::IdRange& r = config.accept.ranges[i];
+    *message_ram_word(MessageRam::kStandardFilterOffset +
+                      MessageRam::kStandardFilterBytes * std::uint32_t(i)) =
+        standard_range_filter(r.first, r.last);
+  }
 
   can.GFC = kGfcRejectAllElse;
-  can.SIDFC = MessageRam::kStandardFilterOffset | (MessageRam::kStandardFilters << 16);  // LSS
+  can.SIDFC =
+      MessageRam::kStandardFilterOffset | (std::uint32_t(config.accept.count) << 16);  // LSS
   can.XIDFC = 0;
   // Blocking FIFO (F0OM = 0): when full, new frames are dropped and counted, so the frames
   // being read are never overwritten under the reader.

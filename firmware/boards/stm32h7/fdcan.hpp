@@ -4,20 +4,22 @@
 //
 // Polled, no interrupts: the application drains the RX FIFO and services the error state
 // every millisecond. The RX FIFO holds 32 frames: 3.6 ms of a bus saturated with 8-byte
-// frames at 1 Mbit/s (111 us or more each), and over 20 ms of what the protocol sends to one
-// node (sensor every 1 ms, trajectory every 4 ms, heartbeat every 10 ms), so an MPC step that
-// delays a poll loses nothing. Overflows are counted (IR.RF0L), never silent.
+// frames at 1 Mbit/s (111 us or more each); over 20 ms of what the forearm protocol sends to
+// one node (sensor every 1 ms, trajectory every 4 ms, heartbeat every 10 ms), so an MPC step
+// that delays a poll loses nothing; over 4 ms of what a 4-joint board hears with its sensors
+// on the same bus in the HIL (7 frames per ms), and that board has no background work to delay
+// the 1 ms drain. Overflows are counted (IR.RF0L), never silent.
 #pragma once
 
 #include <cstdint>
 
 #include "clock.hpp"
-#include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/protocol/codec.hpp"
 #include "registers.hpp"
 
 namespace hmpc::stm32h7 {
 
-using forearm_protocol::Frame;
+using protocol::Frame;
 
 // Nominal bit timing in time quanta (tq): a bit is 1 (sync) + tseg1 + tseg2 tq, sampled after
 // 1 + tseg1. FDCAN_NBTP holds each value minus one: NBRP 1..512, NTSEG1 2..256 tq,
@@ -110,7 +112,9 @@ struct MessageRam {
   static constexpr std::uint32_t kElementBytes = 16;
   static constexpr std::uint32_t kStandardFilterBytes = 4;  // one word per filter element
 
-  static constexpr std::uint32_t kStandardFilters = 1;  // our node's id range
+  // One range filter per accepted range (protocol::accepted_ids: the node's block and the
+  // bus-wide frames).
+  static constexpr std::uint32_t kStandardFilters = protocol::kMaxAcceptedRanges;
   static constexpr std::uint32_t kRxFifo0Elements = 32;
   static constexpr std::uint32_t kTxFifoElements = 16;
 
@@ -123,7 +127,7 @@ struct MessageRam {
   // Hardware limits: 128 standard filters, 64 RX FIFO elements, 32 TX buffers.
   static_assert(kStandardFilters <= 128 && kRxFifo0Elements <= 64 && kTxFifoElements <= 32);
   static_assert(kEndOffset <= kSizeBytes);
-  static_assert(kRxFifo0Offset == 0x004 && kTxFifoOffset == 0x204 && kEndOffset == 0x304);
+  static_assert(kRxFifo0Offset == 0x020 && kTxFifoOffset == 0x220 && kEndOffset == 0x320);
 };
 
 // FDCAN kernel clock source, the RCC_D2CCIP1R.FDCANSEL encoding.
@@ -138,9 +142,9 @@ struct FdcanConfig {
   // RX/TX = PD0/PD1 (default), PA11/PA12, PB8/PB9, PH14/PH13.
   Pin rx{Port::D, 0};
   Pin tx{Port::D, 1};
-  // Accepted identifiers: our node's block of the forearm protocol; everything else,
-  // extended and remote frames included, is rejected by the hardware filter.
-  forearm_protocol::NodeId node = 0;
+  // Accepted identifiers (protocol::accepted_ids of the board's protocol and node); everything
+  // else, extended and remote frames included, is rejected by the hardware filter.
+  protocol::AcceptedIds accept{};
 };
 
 struct FdcanStatus {
@@ -166,7 +170,7 @@ class Fdcan {
     kOk,
     kBadTiming,     // FdcanConfig::timing is outside the NBTP ranges
     kBadPins,       // not one of FDCAN1's AF9 pin pairs
-    kBadNode,       // node above forearm_protocol::kMaxNodeId
+    kBadFilters,    // no accepted range, or one outside the standard identifiers
     kInitTimeout,   // CCCR.INIT never read back as set
     kStartTimeout,  // CCCR.INIT never read back as cleared: is the kernel clock running?
   };

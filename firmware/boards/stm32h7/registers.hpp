@@ -1,7 +1,7 @@
 // STM32H743 core-domain registers used by this board, defined from RM0433 (Rev 7) and the
 // ARMv7-M Architecture Reference Manual. Only what the board needs; each block is a volatile
 // struct at its base address, with the reference manual's register names and offsets checked
-// by static_assert. The FDCAN block is private to fdcan.cpp, the timer block to actuators.cpp.
+// by static_assert. The FDCAN block is private to fdcan.cpp.
 #pragma once
 
 #include <cstddef>
@@ -88,6 +88,7 @@ inline constexpr std::uint32_t kCfgrSwPll1 = 3u << 0;
 inline constexpr std::uint32_t kCfgrSwsMask = 7u << 3;
 inline constexpr std::uint32_t kCfgrSwsPll1 = 3u << 3;
 inline constexpr std::uint32_t kAhb4EnrGpioEn0 = 1u << 0;  // GPIOAEN; port n is bit n
+inline constexpr std::uint32_t kApb1LenrTim3En = 1u << 1;
 inline constexpr std::uint32_t kApb1LenrTim4En = 1u << 2;
 inline constexpr std::uint32_t kApb1HenrFdcanEn = 1u << 8;
 inline constexpr std::uint32_t kApb1HrstrFdcanRst = 1u << 8;
@@ -180,9 +181,32 @@ inline constexpr std::uint32_t kCtrlCycCntEna = 1u << 0;
 inline constexpr std::uint32_t kLarUnlockKey = 0xC5ACCE55u;
 }  // namespace dwt
 
+// General-purpose timer (RM0433, TIM2/TIM3/TIM4/TIM5 register map): TIM3 at 0x4000 0400, TIM4
+// at 0x4000 0800.
+struct Timer {
+  Reg CR1;        // 0x00 CEN (bit 0), ARPE (bit 7)
+  Reg CR2;        // 0x04
+  Reg SMCR;       // 0x08
+  Reg DIER;       // 0x0C
+  Reg SR;         // 0x10
+  Reg EGR;        // 0x14 UG (bit 0)
+  Reg CCMR1;      // 0x18 OC1M[6:4], OC1PE (3); OC2M[14:12], OC2PE (11)
+  Reg CCMR2;      // 0x1C the same for channels 3 and 4
+  Reg CCER;       // 0x20 CCxE at bit 4 (x - 1)
+  Reg CNT;        // 0x24
+  Reg PSC;        // 0x28
+  Reg ARR;        // 0x2C
+  Reg reserved0;  // 0x30
+  Reg CCR[4];     // 0x34..0x40 CCR1..CCR4
+};
+static_assert(offsetof(Timer, CCER) == 0x20 && offsetof(Timer, CCR) == 0x34 &&
+              sizeof(Timer) == 0x44);
+
 inline Rcc& rcc_regs() { return *reinterpret_cast<Rcc*>(0x58024400); }
 inline Pwr& pwr_regs() { return *reinterpret_cast<Pwr*>(0x58024800); }
 inline Flash& flash_regs() { return *reinterpret_cast<Flash*>(0x52002000); }
+inline Timer& tim3_regs() { return *reinterpret_cast<Timer*>(0x40000400); }
+inline Timer& tim4_regs() { return *reinterpret_cast<Timer*>(0x40000800); }
 inline SysTick& systick_regs() { return *reinterpret_cast<SysTick*>(0xE000E010); }
 inline Gpio& gpio_regs(Port port) {
   return *reinterpret_cast<Gpio*>(0x58020000u + 0x400u * static_cast<std::uint32_t>(port));

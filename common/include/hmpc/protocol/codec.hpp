@@ -237,6 +237,30 @@ constexpr bool identify(std::uint32_t id, FrameType& type, NodeId& node) {
   return false;
 }
 
+// The standard identifiers one node hears, as ranges: its node's block (every frame type of
+// the node, whoever sends it) and each bus-wide frame. Acceptance filters (a SocketCAN socket's,
+// a CAN controller's) are set from these, so a board's filter is never restated by hand.
+struct IdRange {
+  std::uint32_t first = 0, last = 0;  // inclusive
+};
+inline constexpr std::size_t kMaxAcceptedRanges = 8;
+struct AcceptedIds {
+  std::array<IdRange, kMaxAcceptedRanges> ranges{};
+  std::size_t count = 0;
+};
+
+// Precondition: node <= P::kIds.max_node.
+template <class P>
+constexpr AcceptedIds accepted_ids(NodeId node) {
+  AcceptedIds out;
+  const std::uint32_t first = P::kIds.base + P::kIds.node_stride * node;
+  out.ranges[out.count++] = {first, first + P::kIds.node_stride - 1};
+  for (const auto& spec : P::kFrames) {
+    if (spec.bus_wide) out.ranges[out.count++] = {spec.id_offset, spec.id_offset};
+  }
+  return out;
+}
+
 // Half away from zero. Not std::lround, which is not constexpr; the one number it rounds
 // otherwise (0.5 less an ulp, which + 0.5 carries to 1) is immaterial at a signal's resolution.
 constexpr std::int64_t round_half_away(double x) {
@@ -552,7 +576,15 @@ constexpr bool frames_are_indexed_with_distinct_ids() {
       if (g.bus_wide == f.bus_wide && g.id_offset == f.id_offset) return false;
     }
   }
-  return P::kIds.base + P::kIds.node_stride * (P::kIds.max_node + 1u) <= 0x800;
+  std::size_t bus_wide = 0;
+  for (const auto& f : P::kFrames) bus_wide += f.bus_wide ? 1 : 0;
+  // A node's block is one mask filter (a power-of-two stride from an aligned base), and the
+  // node's acceptance fits accepted_ids().
+  const bool aligned_blocks = P::kIds.node_stride > 0 &&
+                              (P::kIds.node_stride & (P::kIds.node_stride - 1)) == 0 &&
+                              P::kIds.base % P::kIds.node_stride == 0;
+  return aligned_blocks && bus_wide + 1 <= kMaxAcceptedRanges &&
+         P::kIds.base + P::kIds.node_stride * (P::kIds.max_node + 1u) <= 0x800;
 }
 
 constexpr double magnitude(double x) { return x < 0 ? -x : x; }

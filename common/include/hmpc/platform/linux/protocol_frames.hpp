@@ -31,21 +31,20 @@ inline bool to_protocol_frame(const CanFrame& frame, protocol::Frame& out) {
   return true;
 }
 
-// The frames of one node of protocol P (all its frame types) and P's bus-wide frames, as kernel
-// filters: the kernel drops the rest. Returns how many of `out` it filled (at most kMaxFilters).
-inline constexpr int kMaxFilters = 8;
+// The frames one node of protocol P hears (protocol::accepted_ids: its block and the bus-wide
+// frames) as kernel filters: the kernel drops the rest. Each range is an aligned power of two
+// (the codec checks the layout), so one id/mask pair matches it exactly. Returns how many of
+// `out` it filled.
+inline constexpr int kMaxFilters = int(protocol::kMaxAcceptedRanges);
 template <class P>
 int node_filters(protocol::NodeId node, CanFilter (&out)[kMaxFilters]) {
   constexpr std::uint32_t kFlags = kCanExtendedId | kCanRemoteRequest;  // must be clear
-  int count = 0;
-  out[count++] = {P::kIds.base + P::kIds.node_stride * node,
-                  (kCanStandardIdMask & ~(P::kIds.node_stride - 1)) | kFlags};
-  for (const auto& spec : P::kFrames) {
-    if (spec.bus_wide && count < kMaxFilters) {
-      out[count++] = {spec.id_offset, kCanStandardIdMask | kFlags};
-    }
+  const protocol::AcceptedIds accepted = protocol::accepted_ids<P>(node);
+  for (std::size_t i = 0; i < accepted.count; ++i) {
+    const protocol::IdRange& r = accepted.ranges[i];
+    out[i] = {r.first, (kCanStandardIdMask & ~(r.last - r.first)) | kFlags};
   }
-  return count;
+  return int(accepted.count);
 }
 
 // Encodes `message` with the sender's next counter and sends it. An encoding failure (a value
