@@ -156,7 +156,7 @@ struct JointBoardCounters {
   std::uint32_t refused_gains = 0;       // gains for no joint of this board, or unusable
   std::uint32_t stale_references = 0;    // run -> hold for lack of references
   std::uint32_t estops = 0;
-  std::uint32_t overruns = 0;  // control steps the board support reports late
+  std::uint32_t overruns = 0;  // late wake-ups the board support reports (real-time loop)
   std::uint32_t syncs = 0;
   std::uint32_t control_steps = 0;
 };

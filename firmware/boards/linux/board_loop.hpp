@@ -14,6 +14,7 @@
 //   using Board, Description, SafeMessage, Row;  static constexpr const char* kCsvHeader;
 //   static Row log_row(const Board&, float wall_time_s);  static void write_row(FILE*, const Row&);
 //   static bool work_due(const Board&);  static void run_work(Board&);
+//   static void on_late_ticks(Board&);  // real time: this wake-up catches up missed ticks
 #pragma once
 
 #include <poll.h>
@@ -255,6 +256,7 @@ StopReason run_real_time(typename Support::Board& board, BoardLoop<Support>& loo
                                     : expirations;
     expirations_total += ticks;
     stats.timer_overruns += expirations - 1;
+    if (expirations > 1) Support::on_late_ticks(board);
     if (woke_s - due_s > stats.max_wakeup_latency_s) stats.max_wakeup_latency_s = woke_s - due_s;
     bool work_due = false;
     for (std::uint64_t i = 0; i < ticks; ++i) {

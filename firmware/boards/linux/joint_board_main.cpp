@@ -54,6 +54,8 @@ struct JointSupport {
   }
   static bool work_due(const Board&) { return false; }  // the loops run inside the tick
   static void run_work(Board&) {}
+  // Late ticks run their control steps late: reported in BoardStatus's overrun bit.
+  static void on_late_ticks(Board& b) { b.note_overrun(); }
 };
 
 }  // namespace
