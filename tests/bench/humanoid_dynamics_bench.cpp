@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "hmpc/humanoid/dynamics.hpp"
+#include "hmpc/humanoid/dynamics_derivatives.hpp"
 #include "hmpc/solver/finite_difference.hpp"
 #include "simbody_humanoid.hpp"
 
@@ -152,18 +153,58 @@ void simbody_derivatives(benchmark::State& state) {
   SimbodyForward f;
   run(state, [&](const Sample& s) { benchmark::DoNotOptimize(forward_jacobian(s, std::ref(f))); });
 }
-// Largest |entry| difference of the two Jacobians over the samples, relative to the largest
+// The analytic derivatives (dynamics_derivatives.hpp) in the same coordinates as
+// forward_jacobian: the tangent columns chained to (p, quaternion) and the joint torques.
+struct OursAnalytic {
+  DynamicsDerivatives d{rigid_model()};
+  BasicForwardDynamicsDerivatives<0> out;
+  ForwardJacobian operator()(const Sample& s) {
+    Velocity tau = Velocity::Zero();
+    tau.tail<kJoints>() = s.tau.tail<kJoints>();
+    d.forward_dynamics_derivatives(s.q, s.v, tau, out);
+    const Eigen::Quaterniond orientation(s.q[3], s.q[4], s.q[5], s.q[6]);
+    ForwardJacobian J;
+    J.leftCols<3>() = out.da_dq.middleCols<3>(3) * orientation.toRotationMatrix().transpose();
+    J.middleCols<4>(3) = out.da_dq.leftCols<3>() * tangent_of_quaternion(s.q.segment<4>(3));
+    J.middleCols<kJoints>(7) = out.da_dq.rightCols<kJoints>();
+    J.middleCols<kDofs>(kConfigurationSize) = out.da_dv;
+    J.rightCols<kJoints>() = out.da_dtau.rightCols<kJoints>();
+    return J;
+  }
+};
+void ours_analytic_derivatives(benchmark::State& state) {
+  DynamicsDerivatives d{rigid_model()};
+  BasicForwardDynamicsDerivatives<0> out;
+  run(state, [&](const Sample& s) {
+    d.forward_dynamics_derivatives(s.q, s.v, s.tau, out);
+    benchmark::DoNotOptimize(out.da_dq.data());
+  });
+}
+void ours_inverse_derivatives(benchmark::State& state) {
+  DynamicsDerivatives d{rigid_model()};
+  InverseDynamicsDerivatives out;
+  run(state, [&](const Sample& s) {
+    d.inverse_dynamics_derivatives(s.q, s.v, s.tau, out);
+    benchmark::DoNotOptimize(out.dtau_dq.data());
+  });
+}
+
+// Largest |entry| difference of two Jacobians over the samples, relative to the largest
 // entry.
+template <class A, class B>
+double disagreement(A&& a, B&& b) {
+  double worst = 0.0;
+  for (const Sample& s : samples()) {
+    const ForwardJacobian x = a(s), y = b(s);
+    worst = std::max(worst, (x - y).cwiseAbs().maxCoeff() / x.cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
 double jacobian_disagreement() {
   OursForward ours;
   SimbodyForward simbody;
-  double worst = 0.0;
-  for (const Sample& s : samples()) {
-    const ForwardJacobian a = forward_jacobian(s, std::ref(ours)),
-                          b = forward_jacobian(s, std::ref(simbody));
-    worst = std::max(worst, (a - b).cwiseAbs().maxCoeff() / a.cwiseAbs().maxCoeff());
-  }
-  return worst;
+  return disagreement([&](const Sample& s) { return forward_jacobian(s, std::ref(ours)); },
+                      [&](const Sample& s) { return forward_jacobian(s, std::ref(simbody)); });
 }
 
 BENCHMARK(ours_rnea);
@@ -174,6 +215,8 @@ BENCHMARK(ours_forward);
 BENCHMARK(simbody_forward);
 BENCHMARK(ours_derivatives);
 BENCHMARK(simbody_derivatives);
+BENCHMARK(ours_analytic_derivatives);
+BENCHMARK(ours_inverse_derivatives);
 
 // Keeps each benchmark's time per call (ns) for the side-by-side table.
 class Recorder : public benchmark::ConsoleReporter {
@@ -205,6 +248,32 @@ int main(int argc, char** argv) {
       "derivatives: d(qddot)/d(q, v, tau) by forward differences, 38 forward dynamics; the two "
       "Jacobians differ by at most %.1e of their largest entry (finite-difference noise)\n",
       jacobian_disagreement());
+
+  // Ours by our own units: the forward dynamics' derivatives and the CRBA in forward dynamics
+  // and RNEA calls of the same run.
+  const double rnea = recorder.ns["ours_rnea"], forward = recorder.ns["ours_forward"];
+  const double analytic = recorder.ns["ours_analytic_derivatives"];
+  const double differences = recorder.ns["ours_derivatives"];
+  const double inverse = recorder.ns["ours_inverse_derivatives"];
+  std::printf("\nOurs in our own units (same run)\n");
+  std::printf("%-44s %10s %10s\n", "quantity", "[us]", "ratio");
+  std::printf("%-44s %10.3f %9.2fx RNEA\n", "mass matrix M (CRBA)", recorder.ns["ours_crba"] / 1e3,
+              recorder.ns["ours_crba"] / rnea);
+  std::printf("%-44s %10.3f %9.2fx RNEA\n", "d tau/d(q, v), analytic (RNEA derivatives)",
+              inverse / 1e3, inverse / rnea);
+  std::printf("%-44s %10.3f %9.2fx forward dynamics\n", "d qddot/d(q, v, tau), analytic",
+              analytic / 1e3, analytic / forward);
+  std::printf("%-44s %10.3f %9.2fx forward dynamics\n", "d qddot/d(q, v, tau), forward differences",
+              differences / 1e3, differences / forward);
+  std::printf(
+      "analytic against forward differences: %.2fx faster; they differ by at most %.1e of "
+      "the largest entry (the differences' own error)\n",
+      differences / analytic, [] {
+        OursForward f;
+        OursAnalytic analytic_jacobian;
+        return disagreement(std::ref(analytic_jacobian),
+                            [&](const Sample& s) { return forward_jacobian(s, std::ref(f)); });
+      }());
   benchmark::Shutdown();
   return 0;
 }

@@ -2,51 +2,15 @@
 
 #include <Eigen/Geometry>
 
+#include "hmpc/humanoid/spatial.hpp"
+
 namespace hmpc::humanoid {
 namespace {
 
-Matrix3 skew(const Vector3& x) {
-  Matrix3 s;
-  s << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
-  return s;
-}
-
-// Plücker motion transform (Featherstone Ch. 2) from frame A to frame B, B rotated by E (A to
-// B coordinates) and with origin r in A coordinates: X = [E 0; -E r^ E].
-Matrix6 motion_transform(const Matrix3& E, const Vector3& r) {
-  Matrix6 X;
-  X.topLeftCorner<3, 3>() = E;
-  X.topRightCorner<3, 3>().setZero();
-  X.bottomLeftCorner<3, 3>() = -E * skew(r);
-  X.bottomRightCorner<3, 3>() = E;
-  return X;
-}
-
-// Spatial cross products (Featherstone Ch. 2) for motion (crm) and force (crf = -crm^T).
-Vector6 cross_motion(const Vector6& v, const Vector6& m) {
-  Vector6 out;
-  out.head<3>() = v.head<3>().cross(m.head<3>());
-  out.tail<3>() = v.head<3>().cross(m.tail<3>()) + v.tail<3>().cross(m.head<3>());
-  return out;
-}
-Vector6 cross_force(const Vector6& v, const Vector6& f) {
-  Vector6 out;
-  out.head<3>() = v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>());
-  out.tail<3>() = v.head<3>().cross(f.tail<3>());
-  return out;
-}
-
-// Spatial inertia about the body origin from mass, CoM c and central inertia:
-// [I_c + m c^ c^T, m c^; m c^T, m 1].
-Matrix6 spatial_inertia(double m, const Vector3& c, const Matrix3& inertia_com) {
-  const Matrix3 cx = skew(c);
-  Matrix6 I;
-  I.topLeftCorner<3, 3>() = inertia_com + m * cx * cx.transpose();
-  I.topRightCorner<3, 3>() = m * cx;
-  I.bottomLeftCorner<3, 3>() = m * cx.transpose();
-  I.bottomRightCorner<3, 3>() = m * Matrix3::Identity();
-  return I;
-}
+using spatial::cross_force;
+using spatial::cross_motion;
+using spatial::motion_transform;
+using spatial::spatial_inertia;
 
 constexpr int dof_of(int body) { return kBaseDofs + body - 1; }
 
