@@ -100,9 +100,9 @@ void check_random_states(std::uint32_t seed) {
       BasicVelocity<A> up = s.v, down = s.v;
       up[c] += kStep;
       down[c] -= kStep;
-      dv.col(c) = (dynamics.inverse_dynamics(s.q, up, s.a) -
-                   dynamics.inverse_dynamics(s.q, down, s.a)) /
-                  (2 * kStep);
+      dv.col(c) =
+          (dynamics.inverse_dynamics(s.q, up, s.a) - dynamics.inverse_dynamics(s.q, down, s.a)) /
+          (2 * kStep);
     }
     EXPECT_LE((d.dtau_dq - dq).cwiseAbs().maxCoeff(), kTolerance * largest(dq))
         << "state " << n << "\nanalytic\n"

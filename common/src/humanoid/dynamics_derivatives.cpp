@@ -13,12 +13,9 @@ using spatial::skew;
 using spatial::Vector6;
 
 template <int A>
-BasicDynamicsDerivatives<A>::BasicDynamicsDerivatives(const Model& model)
-    : model_(model), dynamics_(model) {
-  for (int i = 0; i < kBodies; ++i) {
-    const Body& b = model_.bodies[i];
-    body_inertia_[i] = spatial::spatial_inertia(b.mass, b.com, b.inertia);
-  }
+BasicDynamicsDerivatives<A>::BasicDynamicsDerivatives(const Model& model) : model_(model) {
+  // Joints on different legs never couple: the CRBA leaves their entries zero.
+  mass_matrix_.setZero();
   // Parents precede their children (the RNEA's forward pass relies on it too), so a body's
   // subtree is found by walking each body's ancestors once.
   in_subtree_.fill(false);
@@ -27,9 +24,29 @@ BasicDynamicsDerivatives<A>::BasicDynamicsDerivatives(const Model& model)
   }
 }
 
+namespace {
+
+// B = (v x*) I - I (v x) + (h x-bar*) for a symmetric I: with P = (v x)^T I, (v x*) I = -P and
+// I (v x) = P^T, so B = -(P + P^T) + (h x-bar*), where (h x-bar*) w = w x* h is
+// [-n^ -f^; -f^ 0] for h = (n, f).
+Matrix6 coriolis_matrix(const Vector6& v, const Matrix6& I, const Vector6& h) {
+  // (v x) = [w^ 0; u^ w^] for v = (w, u), so P = [w^T I_top + u^T I_bottom; w^T I_bottom].
+  const Matrix3 wT = skew(v.head<3>()).transpose(), uT = skew(v.tail<3>()).transpose();
+  Matrix6 P;
+  P.topRows<3>().noalias() = wT * I.topRows<3>() + uT * I.bottomRows<3>();
+  P.bottomRows<3>().noalias() = wT * I.bottomRows<3>();
+  Matrix6 B = -(P + P.transpose());
+  const Matrix3 n = skew(h.head<3>()), f = skew(h.tail<3>());
+  B.topLeftCorner<3, 3>() -= n;
+  B.topRightCorner<3, 3>() -= f;
+  B.bottomLeftCorner<3, 3>() -= f;
+  return B;
+}
+
+}  // namespace
+
 template <int A>
-void BasicDynamicsDerivatives<A>::forward_pass(const Configuration& q, const Velocity& v,
-                                               const Velocity& a) {
+void BasicDynamicsDerivatives<A>::velocity_pass(const Configuration& q, const Velocity& v) {
   // World poses: R_i body to world, p_i the body origin.
   std::array<Matrix3, kBodies> rotation;
   std::array<Vector3, kBodies> position;
@@ -37,21 +54,18 @@ void BasicDynamicsDerivatives<A>::forward_pass(const Configuration& q, const Vel
   position[0] = q.template head<3>();
   for (int i = 1; i < kBodies; ++i) {
     const Body& b = model_.bodies[i];
-    rotation[i] =
-        rotation[b.parent] * Eigen::AngleAxisd(q[7 + i - 1], b.axis).toRotationMatrix();
+    rotation[i] = rotation[b.parent] * Eigen::AngleAxisd(q[7 + i - 1], b.axis).toRotationMatrix();
     position[i] = position[b.parent] + rotation[b.parent] * b.joint_origin;
   }
-  // Gravity as a fictitious upward acceleration of the world, as in the RNEA.
-  Vector6 gravity_acceleration;
-  gravity_acceleration << Vector3::Zero(), -model_.gravity;
   for (int i = 0; i < kBodies; ++i) {
-    // Body to world: motion X = [R 0; p^ R R], force X^-T = [R p^ R; 0 R] =: F, and the world
-    // inertia I = F I_body F^T.
+    // The world inertia about the world origin: the body's mass at its CoM in world
+    // coordinates, its central inertia rotated into the world. Body to world motion transform
+    // X = [R 0; p^ R R], whose columns are the base's subspace.
     const Matrix3& R = rotation[i];
     const Matrix3 pR = skew(position[i]) * R;
-    Matrix6 F;
-    F << R, pR, Matrix3::Zero(), R;
-    inertia_[i] = F * body_inertia_[i] * F.transpose();
+    const Body& body = model_.bodies[i];
+    body_inertia_[i] = spatial::spatial_inertia(body.mass, position[i] + R * body.com,
+                                                R * body.inertia * R.transpose());
     if (i == 0) {
       for (int c = 0; c < 3; ++c) {  // the columns of X_0: rotations, then translations
         subspace_[c] << R.col(c), pR.col(c);
@@ -61,143 +75,137 @@ void BasicDynamicsDerivatives<A>::forward_pass(const Configuration& q, const Vel
       const Vector3 axis = R * model_.bodies[i].axis;
       subspace_[first_column(i)] << axis, position[i].cross(axis);
     }
-    // v_i = v_parent + S_i qd_i; Sdot_i = v_i x S_i; a_i = a_parent + S_i qdd_i + Sdot_i qd_i.
+    // v_i = v_parent + S_i qd_i; the bias acceleration (a = 0): a0_i = a0_parent + (v_i x S_i)
+    // qd_i.
     const int parent = model_.bodies[i].parent;
     Vector6 vi = i == 0 ? Vector6::Zero().eval() : velocity_[parent];
-    Vector6 ai = i == 0 ? gravity_acceleration : acceleration_[parent];
+    Vector6 ai = i == 0 ? gravity_acceleration() : bias_acceleration_[parent];
     const int first = first_column(i), last = first + column_count(i);
     for (int c = first; c < last; ++c) vi += subspace_[c] * v[c];
-    for (int c = first; c < last; ++c) {
-      subspace_rate_[c] = cross_motion(vi, subspace_[c]);
-      ai += subspace_[c] * a[c] + subspace_rate_[c] * v[c];
-    }
+    for (int c = first; c < last; ++c) ai += cross_motion(vi, subspace_[c]) * v[c];
     velocity_[i] = vi;
-    acceleration_[i] = ai;
-    // f_i = I_i a_i + v_i x* I_i v_i.
-    momentum_[i] = inertia_[i] * vi;
-    force_[i] = inertia_[i] * ai + cross_force(vi, momentum_[i]);
+    bias_acceleration_[i] = ai;
+    // f0_i = I_i a0_i + v_i x* h_i, B_i = (v_i x*) I_i - I_i (v_i x) + (h_i x-bar*).
+    const Vector6 h = body_inertia_[i] * vi;
+    bias_force_[i] = body_inertia_[i] * ai + cross_force(vi, h);
+    coriolis_[i] = coriolis_matrix(vi, body_inertia_[i], h);
   }
-  // F_i = f_i + the children's F.
-  total_ = force_;
-  for (int i = kBodies - 1; i > 0; --i) total_[model_.bodies[i].parent] += total_[i];
+  // Composites, leaves to root: all in world coordinates, so plain sums.
+  inertia_ = body_inertia_;
+  for (int i = kBodies - 1; i > 0; --i) {
+    const int parent = model_.bodies[i].parent;
+    inertia_[parent] += inertia_[i];
+    coriolis_[parent] += coriolis_[i];
+    bias_force_[parent] += bias_force_[i];
+  }
+  // Ic S_c of each column's body: the CRBA's columns (M_c'c = S_c'^T Ic S_c for c' at or above
+  // c) and what the derivatives of the columns at or below c dot with.
+  for (int c = 0; c < kDofs; ++c) inertia_s_[c] = inertia_[body_of(c)] * subspace_[c];
 }
 
 template <int A>
-void BasicDynamicsDerivatives<A>::configuration_column(int column, const Velocity& v,
-                                                       const Velocity& a, Velocity& dtau) {
-  const int root = body_of(column);
-  const Vector6& S = subspace_[column];
-  for (int i = root; i < kBodies; ++i) {
-    if (!in_subtree_[root * kBodies + i]) continue;
+void BasicDynamicsDerivatives<A>::acceleration_pass(const Velocity& a) {
+  // The joint accelerations' part: alpha_i = alpha_parent + S_i qdd_i, f_i = f0_i + I_i alpha_i.
+  std::array<Vector6, kBodies> alpha;
+  for (int i = 0; i < kBodies; ++i) {
     const int parent = model_.bodies[i].parent;
-    // The subtree's root keeps its parent's motion; below it the parent's derivative carries.
-    Vector6 dv = i == root ? Vector6::Zero().eval() : d_velocity_[parent];
-    Vector6 da = i == root ? Vector6::Zero().eval() : d_acceleration_[parent];
+    alpha[i] = i == 0 ? Vector6::Zero().eval() : alpha[parent];
     const int first = first_column(i), last = first + column_count(i);
-    // dS_c = S x S_c; dv_i = dv_parent + dS_c qd_c.
-    for (int c = first; c < last; ++c) dv += cross_motion(S, subspace_[c]) * v[c];
-    // dSdot_c = dv_i x S_c + v_i x dS_c; da_i = da_parent + dS_c qdd_c + dSdot_c qd_c.
-    for (int c = first; c < last; ++c) {
-      const Vector6 dS = cross_motion(S, subspace_[c]);
-      da += dS * a[c] +
-            (cross_motion(dv, subspace_[c]) + cross_motion(velocity_[i], dS)) * v[c];
-    }
-    d_velocity_[i] = dv;
-    d_acceleration_[i] = da;
-    // dI x = S x* (I x) - I (S x x), and
-    // df_i = dI a_i + I da_i + dv_i x* (I v_i) + v_i x* (dI v_i + I dv_i).
-    const Matrix6& I = inertia_[i];
-    const Vector6 dI_a =
-        cross_force(S, force_[i] - cross_force(velocity_[i], momentum_[i])) -
-        I * cross_motion(S, acceleration_[i]);
-    const Vector6 dI_v = cross_force(S, momentum_[i]) - I * cross_motion(S, velocity_[i]);
-    d_force_[i] = dI_a + I * da + cross_force(dv, momentum_[i]) +
-                  cross_force(velocity_[i], dI_v + I * dv);
+    for (int c = first; c < last; ++c) alpha[i] += subspace_[c] * a[c];
+    acceleration_[i] = bias_acceleration_[i] + alpha[i];
+    force_[i] = body_inertia_[i] * alpha[i];
   }
-  backward_column(column, dtau);
-  // The subspaces below the root moved too: tau_c = S_c^T F_c gains dS_c^T F_c.
+  for (int i = kBodies - 1; i > 0; --i) force_[model_.bodies[i].parent] += force_[i];
+  for (int i = 0; i < kBodies; ++i) force_[i] += bias_force_[i];
+}
+
+template <int A>
+void BasicDynamicsDerivatives<A>::derivative_columns(const Velocity& a, Derivatives& out) {
+  constexpr int kJoints = Dimensions<A>::kJoints;
   for (int c = 0; c < kDofs; ++c) {
     const int body = body_of(c);
-    if (in_subtree_[root * kBodies + body]) {
-      dtau[c] += cross_motion(S, subspace_[c]).dot(total_[body]);
-    }
+    const Vector6& S = subspace_[c];
+    out.tau[c] = S.dot(force_[body]);
+    coriolis_s_[c] = coriolis_[body].transpose() * S;
+    // Where c's subtree meets its parent p (the world for the base: at rest, gravity's
+    // acceleration): w = S x v_p, u = S x a_p - w x v_p, z = S x (v_p + v_body).
+    const int parent = model_.bodies[body].parent;
+    const Vector6 vp = body == 0 ? Vector6::Zero().eval() : velocity_[parent];
+    const Vector6 ap = body == 0 ? gravity_acceleration() : acceleration_[parent];
+    w_[c] = cross_motion(S, vp);
+    u_[c] = cross_motion(S, ap) - cross_motion(w_[c], vp);
+    z_[c] = cross_motion(S, vp + velocity_[body]);
+    // What the columns above c dot with.
+    above_q_[c] = cross_force(S, force_[body]) - inertia_[body] * u_[c] - coriolis_[body] * w_[c];
+    above_v_[c] = coriolis_[body] * S - inertia_[body] * z_[c];
   }
-}
-
-template <int A>
-void BasicDynamicsDerivatives<A>::velocity_column(int column, const Velocity& v, Velocity& dtau) {
-  const int root = body_of(column);
-  const Vector6& S = subspace_[column];
-  for (int i = root; i < kBodies; ++i) {
-    if (!in_subtree_[root * kBodies + i]) continue;
-    const int parent = model_.bodies[i].parent;
-    // dv_i = S for the whole subtree; da_i = da_parent + (dv_i x S_c) qd_c (+ Sdot_column).
-    Vector6 da = i == root ? Vector6::Zero().eval() : d_acceleration_[parent];
-    const int first = first_column(i), last = first + column_count(i);
-    for (int c = first; c < last; ++c) {
-      da += cross_motion(S, subspace_[c]) * v[c];
-      if (c == column) da += subspace_rate_[c];
-    }
-    d_acceleration_[i] = da;
-    // df_i = I da_i + dv_i x* (I v_i) + v_i x* (I dv_i).
-    const Matrix6& I = inertia_[i];
-    d_force_[i] =
-        I * da + cross_force(S, momentum_[i]) + cross_force(velocity_[i], I * S);
-  }
-  backward_column(column, dtau);
-}
-
-template <int A>
-void BasicDynamicsDerivatives<A>::backward_column(int column, Velocity& dtau) {
-  const int root = body_of(column);
-  // dF_i = df_i + the children's dF, over the subtree; the root's dF reaches every ancestor
-  // unchanged (nothing else moves).
-  for (int i = kBodies - 1; i > root; --i) {
-    if (in_subtree_[root * kBodies + i]) d_force_[model_.bodies[i].parent] += d_force_[i];
-  }
-  for (int c = 0; c < kDofs; ++c) {
-    const int body = body_of(c);
-    if (in_subtree_[root * kBodies + body]) {
-      dtau[c] = subspace_[c].dot(d_force_[body]);
-    } else if (in_subtree_[body * kBodies + root]) {
-      dtau[c] = subspace_[c].dot(d_force_[root]);
-    } else {
-      dtau[c] = 0.0;
+  out.tau.template tail<kJoints>() += model_.armature.cwiseProduct(a.template tail<kJoints>());
+  for (int j = 0; j < kDofs; ++j) {
+    const int root = body_of(j);
+    for (int c = 0; c < kDofs; ++c) {
+      const int body = body_of(c);
+      if (in_subtree_[root * kBodies + body]) {  // c at or below j
+        out.dtau_dq(c, j) = -(inertia_s_[c].dot(u_[j]) + coriolis_s_[c].dot(w_[j]));
+        out.dtau_dv(c, j) = coriolis_s_[c].dot(subspace_[j]) - inertia_s_[c].dot(z_[j]);
+      } else if (in_subtree_[body * kBodies + root]) {  // c above j
+        out.dtau_dq(c, j) = subspace_[c].dot(above_q_[j]);
+        out.dtau_dv(c, j) = subspace_[c].dot(above_v_[j]);
+      } else {
+        out.dtau_dq(c, j) = 0.0;
+        out.dtau_dv(c, j) = 0.0;
+      }
     }
   }
 }
 
 template <int A>
 void BasicDynamicsDerivatives<A>::inverse_dynamics_derivatives(const Configuration& q,
-                                                               const Velocity& v,
-                                                               const Velocity& a,
+                                                               const Velocity& v, const Velocity& a,
                                                                Derivatives& out) {
-  forward_pass(q, v, a);
-  for (int c = 0; c < kDofs; ++c) out.tau[c] = subspace_[c].dot(total_[body_of(c)]);
-  out.tau.template tail<Dimensions<A>::kJoints>() +=
-      model_.armature.cwiseProduct(a.template tail<Dimensions<A>::kJoints>());
-  Velocity column;
-  for (int c = 0; c < kDofs; ++c) {
-    configuration_column(c, v, a, column);
-    out.dtau_dq.col(c) = column;
-    velocity_column(c, v, column);
-    out.dtau_dv.col(c) = column;
-  }
+  velocity_pass(q, v);
+  acceleration_pass(a);
+  derivative_columns(a, out);
 }
 
 template <int A>
 void BasicDynamicsDerivatives<A>::forward_dynamics_derivatives(
     const Configuration& q, const Velocity& v, const Velocity& tau,
     BasicForwardDynamicsDerivatives<A>& out) {
-  // a = M^-1 (tau - c), c the RNEA at a = 0 (one pass sets the configuration for M too).
-  const Velocity c = dynamics_.inverse_dynamics(q, v, Velocity::Zero());
-  cholesky_.compute(dynamics_.mass_matrix());
-  out.a = cholesky_.solve(tau - c);
-  inverse_dynamics_derivatives(q, v, out.a, inverse_);
-  out.da_dtau.setIdentity();
-  cholesky_.solveInPlace(out.da_dtau);
-  out.da_dq.noalias() = -out.da_dtau * inverse_.dtau_dq;
-  out.da_dv.noalias() = -out.da_dtau * inverse_.dtau_dv;
+  // The velocity pass gives the bias forces c_c = S_c^T F0 and, from the composite inertias,
+  // M (the CRBA in world coordinates): M_c'c = S_c'^T Ic S_c for c' at or above c.
+  velocity_pass(q, v);
+  Velocity bias;
+  for (int c = 0; c < kDofs; ++c) {
+    const int body = body_of(c);
+    bias[c] = subspace_[c].dot(bias_force_[body]);
+    for (int k = c; k >= 0; --k) {
+      if (!in_subtree_[body_of(k) * kBodies + body]) continue;
+      const double m = subspace_[k].dot(inertia_s_[c]);
+      mass_matrix_(k, c) = m;
+      mass_matrix_(c, k) = m;
+    }
+  }
+  mass_matrix_.diagonal().template tail<Dimensions<A>::kJoints>() += model_.armature;
+  // M^-1 = L^-T L^-1 from M = L L^T, L^-1 by forward substitution column by column: at 14x14
+  // these plain loops and coefficient-wise products beat Eigen's blocked triangular solves.
+  cholesky_.compute(mass_matrix_);
+  const auto L = cholesky_.matrixLLT();  // lower triangle: L
+  MassMatrix inverse_l = MassMatrix::Zero();
+  for (int j = 0; j < kDofs; ++j) {
+    inverse_l(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < kDofs; ++i) {
+      double sum = 0.0;
+      for (int k = j; k < i; ++k) sum += L(i, k) * inverse_l(k, j);
+      inverse_l(i, j) = -sum / L(i, i);
+    }
+  }
+  out.da_dtau.noalias() = inverse_l.transpose().lazyProduct(inverse_l);
+  // a = M^-1 (tau - c), then the derivatives at it: da/dx = -M^-1 d tau/dx, da/dtau = M^-1.
+  out.a.noalias() = out.da_dtau * (tau - bias);
+  acceleration_pass(out.a);
+  derivative_columns(out.a, inverse_);
+  out.da_dq.noalias() = -out.da_dtau.lazyProduct(inverse_.dtau_dq);
+  out.da_dv.noalias() = -out.da_dtau.lazyProduct(inverse_.dtau_dv);
 }
 
 Eigen::Matrix<double, 3, 4> tangent_of_quaternion(const Eigen::Vector4d& quat) {

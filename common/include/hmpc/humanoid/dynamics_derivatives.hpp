@@ -1,19 +1,28 @@
 // Analytic derivatives of the humanoid's inverse dynamics tau = RNEA(q, v, a) (dynamics.hpp)
 // with respect to the configuration and the velocity, after Carpentier and Mansard ("Analytical
-// Derivatives of Rigid Body Dynamics Algorithms", RSS 2018): the recursions written in the
-// world frame, where a joint's motion subspace S_j is the only thing its angle moves, so that
-//   dS_k/dq_j = S_j x S_k                      (j an ancestor of k, or j = k),
-//   dI_i/dq_j = S_j x* I_i - I_i S_j x         (body i in j's subtree; I_i its world inertia),
-// and RNEA's forward pass (v_i = v_parent + S_i qd_i, a_i = a_parent + S_i qdd_i + Sdot_i qd_i,
-// Sdot_i = v_i x S_i, f_i = I_i a_i + v_i x* I_i v_i) and backward pass (F_i = f_i + sum of the
-// children's F, tau_i = S_i^T F_i) are differentiated term by term, one column (a joint, or a
-// base direction) at a time over that column's subtree: only its descendants move.
+// Derivatives of Rigid Body Dynamics Algorithms", RSS 2018), derived here in our conventions.
+// Everything is in the world frame at the world origin, where a joint's motion subspace S_j is
+// the only thing its angle moves:
+//   dS_k/dq_j = S_j x S_k  (k in j's subtree),   dI_i/dq_j = S_j x* I_i - I_i S_j x.
+// RNEA there: v_i = v_parent + S_i qd_i, a_i = a_parent + S_i qdd_i + (v_i x S_i) qd_i (a_world =
+// gravity's fictitious upward acceleration), f_i = I_i a_i + v_i x* I_i v_i, F_i = f_i + the
+// children's F, tau_c = S_c^T F_body(c). Moving q_j turns j's subtree rigidly about S_j, under
+// which f is covariant (df = S_j x* f) except where the subtree meets its parent p: with
+//   w_j = S_j x v_p,  u_j = S_j x a_p - w_j x v_p,  z_j = S_j x (v_p + v_body(j)),
+// and B_i = (v_i x*) I_i - I_i (v_i x) + (h_i x-bar*) (h_i = I_i v_i; (h x-bar*) w = w x* h),
+// summing over the subtree (Ic, Bc: composite inertia and B; F the composite force):
+//   column c at or below j:  d tau_c/dq_j = -S_c^T (Ic u_j + Bc w_j),  d tau_c/dv_j = S_c^T (Bc S_j
+//   - Ic z_j)
+//                            (Ic, Bc of c's body; the S_j x* F term cancels against dS_c^T F);
+//   column c above j:        d tau_c/dq_j = S_c^T (S_j x* F - Ic u_j - Bc w_j),
+//                            d tau_c/dv_j = S_c^T (Bc S_j - Ic z_j)   (Ic, Bc, F of j's body);
+//   elsewhere 0. One forward pass, one backward pass of 6x6 sums, then 6-vector dot products.
 //
 // The configuration derivative is taken in the tangent space: a joint's column is d/dq_j; a
 // base column c is the right perturbation of the torso's pose by the unit twist e_c in torso
 // coordinates (rotation R exp(eps e_c^), or origin p + eps R e_c), the base's 6 motion subspace
-// columns S_0 = X_0 (torso to world) moving as dS_0c'/dq_c = S_0c x S_0c' for every pair. The
-// chain to the quaternion coordinates is the caller's (tangent_of_quaternion below).
+// columns being S_0 = X_0 (torso to world), with the world (v_p = 0, a_p = gravity's) as their
+// parent. The chain to the quaternion coordinates is the caller's (tangent_of_quaternion).
 //
 // Sign and frame conventions are RNEA's: tau's base part is the spatial force on the torso in
 // torso coordinates. d tau / d a is M(q) (the CRBA). Everything is fixed-size; no call
@@ -29,8 +38,8 @@ namespace hmpc::humanoid {
 
 template <int ArmJoints>
 struct BasicInverseDynamicsDerivatives {
-  BasicVelocity<ArmJoints> tau;           // RNEA(q, v, a), for checking against dynamics.hpp
-  BasicMassMatrix<ArmJoints> dtau_dq;     // columns: the tangent directions above
+  BasicVelocity<ArmJoints> tau;        // RNEA(q, v, a), for checking against dynamics.hpp
+  BasicMassMatrix<ArmJoints> dtau_dq;  // columns: the tangent directions above
   BasicMassMatrix<ArmJoints> dtau_dv;
 };
 
@@ -51,6 +60,7 @@ class BasicDynamicsDerivatives {
   using Configuration = BasicConfiguration<ArmJoints>;
   using Velocity = BasicVelocity<ArmJoints>;
   using Derivatives = BasicInverseDynamicsDerivatives<ArmJoints>;
+  using MassMatrix = BasicMassMatrix<ArmJoints>;
   static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
   static constexpr int kDofs = Dimensions<ArmJoints>::kDofs;
 
@@ -58,18 +68,23 @@ class BasicDynamicsDerivatives {
 
   void inverse_dynamics_derivatives(const Configuration& q, const Velocity& v, const Velocity& a,
                                     Derivatives& out);
-  void forward_dynamics_derivatives(const Configuration& q, const Velocity& v,
-                                    const Velocity& tau,
+  void forward_dynamics_derivatives(const Configuration& q, const Velocity& v, const Velocity& tau,
                                     BasicForwardDynamicsDerivatives<ArmJoints>& out);
 
  private:
-  // The world-frame RNEA at (q, v, a), kept for the derivative passes.
-  void forward_pass(const Configuration& q, const Velocity& v, const Velocity& a);
-  // One column's derivative of every body's force, over the column's subtree, then of tau.
-  void configuration_column(int column, const Velocity& v, const Velocity& a, Velocity& dtau);
-  void velocity_column(int column, const Velocity& v, Velocity& dtau);
-  void backward_column(int column, Velocity& dtau);
+  // The world-frame RNEA in two parts, kept for the derivatives: what q and v give (poses,
+  // subspaces, velocities, the bias accelerations and forces at a = 0, B, the composite
+  // inertias), then what the accelerations add (a_i, the composite forces F).
+  void velocity_pass(const Configuration& q, const Velocity& v);
+  void acceleration_pass(const Velocity& a);
+  void derivative_columns(const Velocity& a, Derivatives& out);
 
+  // Gravity as a fictitious upward acceleration of the world, as in the RNEA.
+  spatial::Vector6 gravity_acceleration() const {
+    spatial::Vector6 a;
+    a << spatial::Vector3::Zero(), -model_.gravity;
+    return a;
+  }
   static constexpr int body_of(int column) {
     return column < kBaseDofs ? 0 : column - kBaseDofs + 1;
   }
@@ -78,17 +93,19 @@ class BasicDynamicsDerivatives {
   static constexpr int column_count(int body) { return body == 0 ? kBaseDofs : 1; }
 
   Model model_;
-  BasicDynamics<ArmJoints> dynamics_;  // M and its factorisation for the forward dynamics
+  BasicMassMatrix<ArmJoints> mass_matrix_;  // M and its factorisation, for forward dynamics
   Eigen::LLT<BasicMassMatrix<ArmJoints>> cholesky_{BasicMassMatrix<ArmJoints>::Identity()};
   Derivatives inverse_;
-  std::array<spatial::Matrix6, kBodies> body_inertia_;  // about the body origin, body coords
-  std::array<bool, kBodies * kBodies> in_subtree_;       // [root * kBodies + i]: i below root
+  std::array<bool, kBodies * kBodies> in_subtree_;  // [root * kBodies + i]: i below root
   // Workspace, world frame at the world origin.
-  std::array<spatial::Matrix6, kBodies> inertia_;  // I_i
-  std::array<spatial::Vector6, kBodies> velocity_, acceleration_, momentum_, force_, total_;
-  std::array<spatial::Vector6, kDofs> subspace_, subspace_rate_;  // S_c, Sdot_c
-  // One column's derivatives.
-  std::array<spatial::Vector6, kBodies> d_velocity_, d_acceleration_, d_force_;
+  std::array<spatial::Matrix6, kBodies> body_inertia_;        // I_i
+  std::array<spatial::Matrix6, kBodies> inertia_, coriolis_;  // Ic, and B_i then Bc
+  std::array<spatial::Vector6, kBodies> velocity_, bias_acceleration_, acceleration_;
+  std::array<spatial::Vector6, kBodies> bias_force_, force_;  // composite F at a = 0, and F
+  std::array<spatial::Vector6, kDofs> subspace_;              // S_c
+  // Per column j: u_j, w_j, z_j; the vectors its ancestors' columns dot with; and per column c
+  // the products Ic S_c and Bc^T S_c of its own body.
+  std::array<spatial::Vector6, kDofs> u_, w_, z_, above_q_, above_v_, inertia_s_, coriolis_s_;
 };
 
 // The body-frame rotation increment of a change dquat of the quaternion coordinates (w x y z)

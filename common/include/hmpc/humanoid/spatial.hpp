@@ -1,6 +1,7 @@
 // Spatial (6-D) algebra of Featherstone's "Rigid Body Dynamics Algorithms" (2008, Ch. 2), in
 // Plücker coordinates with the angular part first: motion vectors (omega, v_origin) and force
-// vectors (moment about the origin, force). Shared by the dynamics and its derivatives.
+// vectors (moment about the origin, force). Shared by the dynamics and its derivatives, whose
+// inner loops call these small functions hundreds of times per call: they are forced inline.
 #pragma once
 
 #include <Eigen/Core>
@@ -12,7 +13,7 @@ using Matrix3 = Eigen::Matrix3d;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 
-inline Matrix3 skew(const Vector3& x) {
+EIGEN_ALWAYS_INLINE Matrix3 skew(const Vector3& x) {
   Matrix3 s;
   s << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
   return s;
@@ -30,13 +31,13 @@ inline Matrix6 motion_transform(const Matrix3& E, const Vector3& r) {
 }
 
 // Cross products for motion (v x m, crm) and force (v x* f, crf = -crm^T).
-inline Vector6 cross_motion(const Vector6& v, const Vector6& m) {
+EIGEN_ALWAYS_INLINE Vector6 cross_motion(const Vector6& v, const Vector6& m) {
   Vector6 out;
   out.head<3>() = v.head<3>().cross(m.head<3>());
   out.tail<3>() = v.head<3>().cross(m.tail<3>()) + v.tail<3>().cross(m.head<3>());
   return out;
 }
-inline Vector6 cross_force(const Vector6& v, const Vector6& f) {
+EIGEN_ALWAYS_INLINE Vector6 cross_force(const Vector6& v, const Vector6& f) {
   Vector6 out;
   out.head<3>() = v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>());
   out.tail<3>() = v.head<3>().cross(f.tail<3>());
