@@ -13,6 +13,7 @@
 
 #include "hmpc/humanoid/dynamics_derivatives.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
+#include "humanoid_random_state.hpp"
 
 namespace {
 
@@ -33,26 +34,13 @@ struct Sample {
   BasicVelocity<A> v, a;
 };
 
-// Joint angles within their ranges, any orientation, the rates of a fast motion and the
-// accelerations of a hard landing.
+// A random state (humanoid_random_state.hpp) and the accelerations of a hard landing.
 template <int A>
 Sample<A> random_sample(const BasicModel<A>& model, std::mt19937& rng) {
-  constexpr int kJoints = Dimensions<A>::kJoints;
+  const BasicState<A> x = test_states::random_state(model, rng);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::normal_distribution<double> gauss;
-  Sample<A> s;
-  s.q.template head<3>() << unit(rng), unit(rng), 0.9 + 0.3 * unit(rng);
-  const Eigen::Quaterniond orientation =
-      Eigen::Quaterniond(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized();
-  s.q.template segment<4>(3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
-  for (int j = 0; j < kJoints; ++j) {
-    const double t = 0.5 * (unit(rng) + 1.0);
-    s.q[7 + j] = model.joint_lower[j] + t * (model.joint_upper[j] - model.joint_lower[j]);
-  }
-  for (int k = 0; k < Dimensions<A>::kDofs; ++k) {
-    s.v[k] = (k < 3 ? 3.0 : k < 6 ? 2.0 : 8.0) * unit(rng);
-    s.a[k] = 30.0 * unit(rng);
-  }
+  Sample<A> s{x.q, x.v, {}};
+  for (int k = 0; k < Dimensions<A>::kDofs; ++k) s.a[k] = 30.0 * unit(rng);
   return s;
 }
 
@@ -156,13 +144,9 @@ TEST(HumanoidDynamicsDerivatives, ForwardDynamicsMatchesCentralDifferences) {
   DynamicsDerivatives derivatives(model);
   BasicForwardDynamicsDerivatives<0> d;
   std::mt19937 rng(13);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (int n = 0; n < kRandomStates; ++n) {
     const Sample<0> s = random_sample(model, rng);
-    Velocity tau;
-    for (int k = 0; k < kDofs; ++k) {
-      tau[k] = (k < kBaseDofs ? 50.0 : model.torque_limit[k - kBaseDofs]) * unit(rng);
-    }
+    const Velocity tau = test_states::random_generalized_force(model, rng);
     derivatives.forward_dynamics_derivatives(s.q, s.v, tau, d);
     EXPECT_LE((d.a - dynamics.forward_dynamics(s.q, s.v, tau)).cwiseAbs().maxCoeff(),
               1e-9 * largest(d.a));

@@ -16,6 +16,7 @@
 
 #include "hmpc/humanoid/dynamics.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
+#include "humanoid_random_state.hpp"
 #include "simbody_humanoid.hpp"
 
 namespace {
@@ -34,29 +35,10 @@ struct RandomState {
 };
 using State = RandomState<0>;
 
-// Joint angles uniform within the ranges of motion, base anywhere near standing with a uniformly
-// random orientation (normalised Gaussian quaternion), velocities of a fast motion, torques
-// within the limits and a random wrench on the base (exercising the base rows of M^-1).
 template <int A>
 RandomState<A> random_state(const BasicModel<A>& model, std::mt19937& rng) {
-  constexpr int kJoints = Dimensions<A>::kJoints;
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::normal_distribution<double> gauss;
-  RandomState<A> s;
-  s.q.template head<3>() << unit(rng), unit(rng), 0.9 + 0.3 * unit(rng);
-  const Eigen::Quaterniond orientation =
-      Eigen::Quaterniond(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized();
-  s.q.template segment<4>(3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
-  for (int j = 0; j < kJoints; ++j) {
-    const double t = 0.5 * (unit(rng) + 1.0);
-    s.q[7 + j] = model.joint_lower[j] + t * (model.joint_upper[j] - model.joint_lower[j]);
-  }
-  for (int k = 0; k < 3; ++k) s.v[k] = 3.0 * unit(rng);  // rad/s
-  for (int k = 3; k < 6; ++k) s.v[k] = 2.0 * unit(rng);  // m/s
-  for (int j = 0; j < kJoints; ++j) s.v[kBaseDofs + j] = 8.0 * unit(rng);
-  for (int k = 0; k < kBaseDofs; ++k) s.tau[k] = 50.0 * unit(rng);
-  for (int j = 0; j < kJoints; ++j) s.tau[kBaseDofs + j] = model.torque_limit[j] * unit(rng);
-  return s;
+  const BasicState<A> x = test_states::random_state(model, rng);
+  return {x.q, x.v, test_states::random_generalized_force(model, rng)};
 }
 
 template <class A, class B>
