@@ -11,12 +11,11 @@
 //   w_j = S_j x v_p,  u_j = S_j x a_p - w_j x v_p,  z_j = S_j x (v_p + v_body(j)),
 // and B_i = (v_i x*) I_i - I_i (v_i x) + (h_i x-bar*) (h_i = I_i v_i; (h x-bar*) w = w x* h),
 // summing over the subtree (Ic, Bc: composite inertia and B; F the composite force):
-//   column c at or below j:  d tau_c/dq_j = -S_c^T (Ic u_j + Bc w_j),  d tau_c/dv_j = S_c^T (Bc S_j
-//   - Ic z_j)
-//                            (Ic, Bc of c's body; the S_j x* F term cancels against dS_c^T F);
-//   column c above j:        d tau_c/dq_j = S_c^T (S_j x* F - Ic u_j - Bc w_j),
-//                            d tau_c/dv_j = S_c^T (Bc S_j - Ic z_j)   (Ic, Bc, F of j's body);
-//   elsewhere 0. One forward pass, one backward pass of 6x6 sums, then 6-vector dot products.
+// - column c at or below j (Ic, Bc of c's body; the S_j x* F term cancels against dS_c^T F):
+//     d tau_c/dq_j = -S_c^T (Ic u_j + Bc w_j),     d tau_c/dv_j = S_c^T (Bc S_j - Ic z_j);
+// - column c above j (Ic, Bc and F of j's body):
+//     d tau_c/dq_j = S_c^T (S_j x* F - Ic u_j - Bc w_j),  d tau_c/dv_j = S_c^T (Bc S_j - Ic z_j);
+// - 0 elsewhere. One forward pass, one backward pass of 6x6 sums, then 6-vector dot products.
 //
 // The configuration derivative is taken in the tangent space: a joint's column is d/dq_j; a
 // base column c is the right perturbation of the torso's pose by the unit twist e_c in torso
