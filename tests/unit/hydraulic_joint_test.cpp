@@ -278,15 +278,16 @@ TEST(HydraulicTorqueTuning, GainsFollowTheStatedProcedure) {
 TEST(HydraulicTorqueTuning, LoadVelocityScheduleFollowsTheOperatingPoint) {
   const Parameters p;
   const State nominal = hy::no_load_operating_point(p);
-  EXPECT_NEAR(hy::load_velocity_schedule(p, nominal, 0.0), 1.0, 1e-12);
+  const double ratio = hy::no_load_velocity_ratio(p);
+  EXPECT_NEAR(hy::load_velocity_schedule(p, ratio, nominal, 0.0), 1.0, 1e-12);
   State loaded = nominal;
   loaded.pressure_a = 0.8 * p.supply_pressure;  // pushing hard: little drop across land a
-  const double pushing = hy::load_velocity_schedule(p, loaded, 0.0);
+  const double pushing = hy::load_velocity_schedule(p, ratio, loaded, 0.0);
   EXPECT_GT(pushing, 1.0);
   EXPECT_LE(pushing, 2.0);
   loaded.pressure_a = p.supply_pressure;  // no drop at all: k_q of land a vanishes
   loaded.pressure_b = 0;
-  EXPECT_EQ(hy::load_velocity_schedule(p, loaded, 0.0), 2.0);
+  EXPECT_EQ(hy::load_velocity_schedule(p, ratio, loaded, 0.0), 2.0);
 }
 
 // The in-process pendulum: at rest hanging it stays; released it swings at sqrt(m g l / I)

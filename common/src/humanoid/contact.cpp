@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hmpc/humanoid/spatial.hpp"
+
 namespace hmpc::humanoid {
 namespace {
 
@@ -17,13 +19,9 @@ double logistic(double x) {
   return e / (1.0 + e);
 }
 
-Matrix3 skew(const Vector3& x) {
-  Matrix3 s;
-  s << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
-  return s;
-}
-
 }  // namespace
+
+using spatial::skew;
 
 template <int A>
 BasicPointJacobian<A> point_jacobian(const BasicModel<A>& model,

@@ -13,7 +13,8 @@ using spatial::skew;
 using spatial::Vector6;
 
 template <int A>
-BasicDynamicsDerivatives<A>::BasicDynamicsDerivatives(const Model& model) : model_(model) {
+BasicDynamicsDerivatives<A>::BasicDynamicsDerivatives(const Model& model)
+    : model_(model), dynamics_(model) {
   // Joints on different legs never couple: the CRBA leaves their entries zero.
   mass_matrix_.setZero();
   // Parents precede their children (the RNEA's forward pass relies on it too), so a body's
@@ -47,16 +48,10 @@ Matrix6 coriolis_matrix(const Vector6& v, const Matrix6& I, const Vector6& h) {
 
 template <int A>
 void BasicDynamicsDerivatives<A>::velocity_pass(const Configuration& q, const Velocity& v) {
-  // World poses: R_i body to world, p_i the body origin.
-  std::array<Matrix3, kBodies> rotation;
-  std::array<Vector3, kBodies> position;
-  rotation[0] = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
-  position[0] = q.template head<3>();
-  for (int i = 1; i < kBodies; ++i) {
-    const Body& b = model_.bodies[i];
-    rotation[i] = rotation[b.parent] * Eigen::AngleAxisd(q[7 + i - 1], b.axis).toRotationMatrix();
-    position[i] = position[b.parent] + rotation[b.parent] * b.joint_origin;
-  }
+  // World poses (R_i body to world, p_i the body origin) by dynamics.hpp's kinematics.
+  dynamics_.kinematics(q, v, kinematics_);
+  const auto& rotation = kinematics_.rotation;
+  const auto& position = kinematics_.position;
   for (int i = 0; i < kBodies; ++i) {
     // The world inertia about the world origin: the body's mass at its CoM in world
     // coordinates, its central inertia rotated into the world. Body to world motion transform
@@ -75,8 +70,8 @@ void BasicDynamicsDerivatives<A>::velocity_pass(const Configuration& q, const Ve
       const Vector3 axis = R * model_.bodies[i].axis;
       subspace_[first_column(i)] << axis, position[i].cross(axis);
     }
-    // v_i = v_parent + S_i qd_i; the bias acceleration (a = 0): a0_i = a0_parent + (v_i x S_i)
-    // qd_i.
+    // v_i = v_parent + S_i qd_i; the bias acceleration (a = 0):
+    // a0_i = a0_parent + (v_i x S_i) qd_i.
     const int parent = model_.bodies[i].parent;
     Vector6 vi = i == 0 ? Vector6::Zero().eval() : velocity_[parent];
     Vector6 ai = i == 0 ? gravity_acceleration() : bias_acceleration_[parent];
@@ -189,7 +184,7 @@ void BasicDynamicsDerivatives<A>::forward_dynamics_derivatives(
   // M^-1 = L^-T L^-1 from M = L L^T, L^-1 by forward substitution column by column: at 14x14
   // these plain loops and coefficient-wise products beat Eigen's blocked triangular solves.
   cholesky_.compute(mass_matrix_);
-  const auto L = cholesky_.matrixLLT();  // lower triangle: L
+  const MassMatrix& L = cholesky_.matrixLLT();  // lower triangle: L
   MassMatrix inverse_l = MassMatrix::Zero();
   for (int j = 0; j < kDofs; ++j) {
     inverse_l(j, j) = 1.0 / L(j, j);

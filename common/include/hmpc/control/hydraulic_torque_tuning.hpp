@@ -94,10 +94,5 @@ Scalar load_velocity_schedule(const JointActuatorParameters<Scalar>& believed, S
   const Scalar factor = (here.load_velocity / here.valve) / no_load_ratio;
   return factor < Scalar(0) ? Scalar(0) : (factor > Scalar(2) ? Scalar(2) : factor);
 }
-template <typename Scalar>
-Scalar load_velocity_schedule(const JointActuatorParameters<Scalar>& believed,
-                              const JointActuatorState<Scalar>& measured, Scalar theta) {
-  return load_velocity_schedule(believed, no_load_velocity_ratio(believed), measured, theta);
-}
 
 }  // namespace hmpc::hydraulic

@@ -92,6 +92,8 @@ class BasicDynamicsDerivatives {
   static constexpr int column_count(int body) { return body == 0 ? kBaseDofs : 1; }
 
   Model model_;
+  BasicDynamics<ArmJoints> dynamics_;  // its kinematics: the bodies' world poses
+  BasicKinematics<ArmJoints> kinematics_;
   BasicMassMatrix<ArmJoints> mass_matrix_;  // M and its factorisation, for forward dynamics
   Eigen::LLT<BasicMassMatrix<ArmJoints>> cholesky_{BasicMassMatrix<ArmJoints>::Identity()};
   Derivatives inverse_;
