@@ -136,6 +136,65 @@ Vector3 BasicContactModel<A>::force_at(int i, const Vector3& position, const Vec
 }
 
 template <int A>
+PointForceSlopes BasicContactModel<A>::force_slopes(int i, const Vector3& position,
+                                                    const Vector3& velocity, const Vector3& w,
+                                                    double h) const {
+  const ContactParameters& c = contact_;
+  const double s = c.smoothing, eps = c.clamp_smoothing, k = c.stiffness, mu = c.friction;
+  const bool seat = i >= kSolePoints;
+  const double gap = seat ? position.z() - c.seat_height : position.z();
+  // The seat window S(x) and S'(x) (logistic' = sigma (1 - sigma)); 1 and 0 on the soles.
+  double scale = 1.0, dscale = 0.0;
+  if (seat) {
+    const double e = c.seat_edge;
+    const double left = logistic((position.x() - c.seat_x_min) / e),
+                 right = logistic((c.seat_x_max - position.x()) / e);
+    scale = left * right;
+    dscale = (left * (1.0 - left) * right - left * right * (1.0 - right)) / e;
+  }
+  // (C1), (C2) and their slopes: d depth/dgap = -sigma_d, dg/dv_z = -c sigma_g.
+  const double depth = s * softplus(-gap / s), sigma_d = logistic(-gap / s);
+  const double y = 1.0 - c.damping * velocity.z();
+  const double clamp = eps * softplus(y / eps), sigma_g = logistic(y / eps);
+  const double normal = scale * k * depth * clamp;
+  Vector3 dnormal;  // dF_n / d(x, gap, v_z)
+  dnormal << dscale * k * depth * clamp, -scale * k * sigma_d * clamp,
+      -scale * k * depth * c.damping * sigma_g;
+  // D's normal entry D_zz = -S k depth c sigma_g and its slopes in (x, gap, v_z).
+  const double d_zz = -scale * k * depth * c.damping * sigma_g;
+  Vector3 dd_zz;
+  dd_zz << -dscale * k * depth * c.damping * sigma_g, scale * k * c.damping * sigma_g * sigma_d,
+      scale * k * depth * c.damping * c.damping * sigma_g * (1.0 - sigma_g) / eps;
+  // (C3): F_t = -mu F_n t / r, D_tt = -mu F_n Q, Q = (1 - t t^T / r^2) / r; D_tt w_t's slope
+  // in t is -mu F_n dE/dt with E = Q w_t = w_t / r - t (t . w_t) / r^3.
+  const Eigen::Vector2d t = velocity.head<2>(), wt = w.head<2>();
+  const double r2 = t.squaredNorm() + c.slip_velocity * c.slip_velocity, r = std::sqrt(r2);
+  const Eigen::Matrix2d Q = (Eigen::Matrix2d::Identity() - t * t.transpose() / r2) / r;
+  const Eigen::Vector2d E = Q * wt;
+  const double tw = t.dot(wt), r3 = r2 * r;
+  const Eigen::Matrix2d dE =
+      -(wt * t.transpose() + tw * Eigen::Matrix2d::Identity() + t * wt.transpose()) / r3 +
+      3.0 * tw * t * t.transpose() / (r3 * r2);
+  PointForceSlopes out;
+  out.force.head<2>() = -mu * normal * (t / r + h * E);
+  out.force.z() = normal + h * d_zz * w.z();
+  // Each of (x, gap, v_z) moves F_n and D_zz; gap is p_z and x is p_x.
+  const Eigen::Vector2d by_normal = -mu * (t / r + h * E);
+  Vector3 slope;
+  for (int n = 0; n < 3; ++n) {
+    slope.head<2>() = by_normal * dnormal[n];
+    slope.z() = dnormal[n] + h * dd_zz[n] * w.z();
+    if (n == 0) out.by_position.col(0) = slope;
+    if (n == 1) out.by_position.col(2) = slope;
+    if (n == 2) out.by_velocity.col(2) = slope;
+  }
+  out.by_velocity.topLeftCorner<2, 2>() = -mu * normal * (Q + h * dE);
+  out.by_acceleration.topLeftCorner<2, 2>() = -h * mu * normal * Q;
+  out.by_acceleration(2, 2) = h * d_zz;
+  return out;
+}
+
+template <int A>
 bool BasicContactModel<A>::moves_with(int i, int body) const {
   // A parent is numbered below its children (model.hpp).
   int b = points_[i].body;

@@ -101,7 +101,7 @@ void BasicDynamicsDerivatives<A>::velocity_pass(const Configuration& q, const Ve
 template <int A>
 void BasicDynamicsDerivatives<A>::acceleration_pass(const Velocity& a) {
   // The joint accelerations' part: alpha_i = alpha_parent + S_i qdd_i, f_i = f0_i + I_i alpha_i.
-  std::array<Vector6, kBodies> alpha;
+  std::array<Vector6, kBodies>& alpha = joint_acceleration_;
   for (int i = 0; i < kBodies; ++i) {
     const int parent = model_.bodies[i].parent;
     alpha[i] = i == 0 ? Vector6::Zero().eval() : alpha[parent];
@@ -201,6 +201,50 @@ void BasicDynamicsDerivatives<A>::forward_dynamics_derivatives(
   derivative_columns(out.a, inverse_);
   out.da_dq.noalias() = -out.da_dtau.lazyProduct(inverse_.dtau_dq);
   out.da_dv.noalias() = -out.da_dtau.lazyProduct(inverse_.dtau_dv);
+}
+
+template <int A>
+void BasicDynamicsDerivatives<A>::add_point_force_derivatives(int body, const Vector3& p,
+                                                              const PointForceSlopes& slopes,
+                                                              MassMatrix& dq,
+                                                              MassMatrix& dv) const {
+  // The point's Jacobian columns J_c = P(p) S_c over its chain (the others are zero).
+  const auto point_velocity = [&p](const Vector6& twist) -> Vector3 {
+    return twist.tail<3>() + twist.head<3>().cross(p);
+  };
+  std::array<int, kDofs> chain;
+  int length = 0;
+  for (int b = body; b >= 0; b = model_.bodies[b].parent) {
+    for (int c = first_column(b) + column_count(b) - 1; c >= first_column(b); --c)
+      chain[length++] = c;
+  }
+  std::array<Vector3, kDofs> J;
+  for (int n = 0; n < length; ++n) J[chain[n]] = point_velocity(subspace_[chain[n]]);
+  const Vector3& phi = slopes.force;
+  const Vector3 omega = velocity_[body].template head<3>(),
+                alpha = joint_acceleration_[body].template head<3>();
+  // chain runs from the point's body to the root, so the columns at or below j come before j's.
+  for (int n = 0; n < length; ++n) {
+    const int j = chain[n], root = body_of(j), parent = model_.bodies[root].parent;
+    const Vector6& S = subspace_[j];
+    const Vector3& dp = J[j];
+    const Vector6 dv_rel = root == 0 ? velocity_[body] : velocity_[body] - velocity_[parent];
+    const Vector6 da_rel = root == 0 ? joint_acceleration_[body]
+                                     : joint_acceleration_[body] - joint_acceleration_[parent];
+    const Vector3 dvelocity = omega.cross(dp) + point_velocity(cross_motion(S, dv_rel));
+    const Vector3 dacceleration = alpha.cross(dp) + point_velocity(cross_motion(S, da_rel));
+    const Vector3 chi = slopes.by_position * dp + slopes.by_velocity * dvelocity +
+                        slopes.by_acceleration * dacceleration;
+    const Vector3 turned = chi + phi.cross(S.head<3>()), moment = dp.cross(phi);
+    const Vector3 phi_v = slopes.by_velocity * dp;  // phi_v J_j
+    for (int m = 0; m < length; ++m) {
+      const int c = chain[m];
+      dq(c, j) += in_subtree_[root * kBodies + body_of(c)]
+                      ? J[c].dot(turned)
+                      : J[c].dot(chi) + subspace_[c].template head<3>().dot(moment);
+      dv(c, j) += J[c].dot(phi_v);
+    }
+  }
 }
 
 Eigen::Matrix<double, 3, 4> tangent_of_quaternion(const Eigen::Vector4d& quat) {

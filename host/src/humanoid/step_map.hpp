@@ -81,9 +81,11 @@ double forward_step(double xi) { return detail::fd_step(xi, 0.5); }
 
 template <int A>
 BasicStepMap<A>::BasicStepMap(const Model& model, const Parameters& parameters,
-                              const ContactParameters& contact, double max_substep)
+                              const ContactParameters& contact, double max_substep,
+                              ResidualJacobian residual)
     : dynamics_(model), contact_(model, parameters, contact), parameters_(parameters),
-      joint_lower_(model.joint_lower), joint_upper_(model.joint_upper), max_substep_(max_substep) {}
+      joint_lower_(model.joint_lower), joint_upper_(model.joint_upper), max_substep_(max_substep),
+      residual_(residual), derivatives_(model) {}
 
 template <int A>
 double BasicStepMap<A>::stop_term(int j, double q, double v, double a, double h) const {
@@ -232,6 +234,69 @@ void BasicStepMap<A>::substep(State& x, const JointVector& tau, double h, const 
 template <int A>
 void BasicStepMap<A>::residual_jacobian(const State& x, const Velocity& a, double h, int first_q,
                                         int q_count, int first_v, int v_count) {
+  if (residual_ == ResidualJacobian::kForwardDifferences) {
+    differenced_residual_jacobian(x, a, h, first_q, q_count, first_v, v_count);
+    return;
+  }
+  analytic_residual_jacobian(x, a, h);
+  residual_jacobian_.leftCols(q_count) = analytic_jacobian_.middleCols(first_q, q_count);
+  residual_jacobian_.middleCols(q_count, v_count) =
+      analytic_jacobian_.middleCols(kConfigurationSize + first_v, v_count);
+}
+
+template <int A>
+void BasicStepMap<A>::analytic_residual_jacobian(const State& x, const Velocity& a, double h) {
+  // (L2)'s dynamics term -RNEA(q, v, a).
+  derivatives_.inverse_dynamics_derivatives(x.q, x.v, a, inverse_);
+  residual_by_tangent_ = -inverse_.dtau_dq;
+  MassMatrix by_velocity = -inverse_.dtau_dv;
+  // The contact terms J_i^T phi_i, phi_i = f_i + h D_i J_i a, and d(b - A a)/dh's
+  // sum_i J_i^T D_i J_i a.
+  damping_acceleration_.setZero();
+  for (int k = 0; k < contact_state_.count; ++k) {
+    const PointJacobian& J = contact_state_.jacobian[k];
+    const Vector3 point_acceleration = J * a;
+    damping_acceleration_.noalias() +=
+        J.transpose() * (contact_state_.force_velocity[k] * point_acceleration);
+    const PointForceSlopes slopes = contact_.force_slopes(
+        k, contact_state_.position[k], contact_state_.velocity[k], point_acceleration, h);
+    derivatives_.add_point_force_derivatives(contact_.point(k).body, contact_state_.position[k],
+                                             slopes, residual_by_tangent_, by_velocity);
+  }
+  // The end stops' term T - h K v - (h B + h^2 K) a (stop_term), with T's slopes
+  // dT/dq = -K - v dB/dq and dT/dv = -B; and their part of d(b - A a)/dh.
+  for (int j = 0; j < kJoints; ++j) {
+    const int i = kBaseDofs + j;
+    const double v = x.v[i];
+    const JointStop stop =
+        joint_stop(x.q[kFirstJoint + j], v, joint_lower_[j], joint_upper_[j], parameters_);
+    damping_acceleration_[i] -=
+        (stop.damping + 2.0 * h * stop.stiffness) * a[i] + stop.stiffness * v;
+    residual_by_tangent_(i, i) += -stop.stiffness - v * stop.damping_slope -
+                                  h * v * stop.stiffness_slope -
+                                  (h * stop.damping_slope + h * h * stop.stiffness_slope) * a[i];
+    by_velocity(i, i) += -stop.damping - h * stop.stiffness;
+  }
+  // Tangent columns to q's: the world position p moves the torso by R^T dp in torso
+  // coordinates; the quaternion by its body-frame rotation increment; joints are their own.
+  const Eigen::Vector4d quaternion = x.q.template segment<4>(3);
+  const Matrix3 rotation =
+      Eigen::Quaterniond(quaternion[0], quaternion[1], quaternion[2], quaternion[3])
+          .normalized()
+          .toRotationMatrix();
+  analytic_jacobian_.template leftCols<3>().noalias() =
+      residual_by_tangent_.template middleCols<3>(3) * rotation.transpose();
+  analytic_jacobian_.template middleCols<4>(3).noalias() =
+      residual_by_tangent_.template leftCols<3>() * tangent_of_quaternion(quaternion);
+  analytic_jacobian_.template middleCols<kJoints>(kFirstJoint) =
+      residual_by_tangent_.template rightCols<kJoints>();
+  analytic_jacobian_.template rightCols<kDofs>() = by_velocity;
+}
+
+template <int A>
+void BasicStepMap<A>::differenced_residual_jacobian(const State& x, const Velocity& a, double h,
+                                                    int first_q, int q_count, int first_v,
+                                                    int v_count) {
   const int points = contact_state_.count;
   damping_acceleration_.setZero();
   for (int k = 0; k < points; ++k) {

@@ -23,6 +23,7 @@
 #include <array>
 
 #include "hmpc/humanoid/dynamics.hpp"
+#include "hmpc/humanoid/dynamics_derivatives.hpp"
 
 namespace hmpc::humanoid {
 
@@ -119,6 +120,11 @@ class BasicContactModel {
   // Force on point i at a world position and velocity, and its velocity derivative (as
   // point_force's).
   Vector3 force_at(int i, const Vector3& position, const Vector3& velocity, Matrix3& dforce) const;
+  // The step map's implicit contact force on point i, phi = f + h D w (D = force_at's dforce,
+  // w = J a), and its exact slopes in the point's position, velocity and w (D's own
+  // derivatives included), for the analytic linearisation.
+  PointForceSlopes force_slopes(int i, const Vector3& position, const Vector3& velocity,
+                                const Vector3& w, double h) const;
   // Whether point i is carried by `body` (fixed on it or on a descendant), so moves with its
   // joint.
   bool moves_with(int i, int body) const;

@@ -52,6 +52,15 @@ struct BasicForwardDynamicsDerivatives {
   BasicMassMatrix<ArmJoints> da_dtau;  // M^-1
 };
 
+// A world force phi(p, p_dot, p_acc) on a point, with p its world position, p_dot = J v its
+// velocity and p_acc = J a the point's part of J a (the step map's implicit contact term
+// h D J a), and phi's slopes in each.
+struct PointForceSlopes {
+  Vector3 force = Vector3::Zero();
+  Matrix3 by_position = Matrix3::Zero(), by_velocity = Matrix3::Zero(),
+          by_acceleration = Matrix3::Zero();
+};
+
 template <int ArmJoints>
 class BasicDynamicsDerivatives {
  public:
@@ -69,6 +78,20 @@ class BasicDynamicsDerivatives {
                                     Derivatives& out);
   void forward_dynamics_derivatives(const Configuration& q, const Velocity& v, const Velocity& tau,
                                     BasicForwardDynamicsDerivatives<ArmJoints>& out);
+
+  // At the (q, v, a) of the last inverse_dynamics_derivatives call: the derivatives of the
+  // generalized force J^T phi of a force on a point fixed on `body`, at world position p, added
+  // to dq (tangent columns, as dtau_dq) and dv. Moving q_j moves the point by dp_j = J_j (the
+  // point's part of S_j), its velocity J v by w_b x dp_j + P (S_j x (v_b - v_p)) and J a
+  // likewise with alpha = sum S_c a_c for v (P(p) (w, u) = u + w x p, the point's linear
+  // velocity of a twist; p's parent the world for the base); and J_c turns with S_j for c at
+  // or below j, giving J_c . (phi x w_j), and moves with p for c above it, giving
+  // w_c . (dp_j x phi). So, with chi_j = phi_p dp_j + phi_v d(J v)_j + phi_a d(J a)_j:
+  //   d(J^T phi)_c/dq_j = J_c . (chi_j + phi x w_j) (c at or below j),
+  //                       J_c . chi_j + w_c . (dp_j x phi) (c above j);
+  //   d(J^T phi)/dv = J^T phi_v J.
+  void add_point_force_derivatives(int body, const Vector3& p, const PointForceSlopes& slopes,
+                                   MassMatrix& dq, MassMatrix& dv) const;
 
  private:
   // The world-frame RNEA in two parts, kept for the derivatives: what q and v give (poses,
@@ -102,6 +125,7 @@ class BasicDynamicsDerivatives {
   std::array<spatial::Matrix6, kBodies> body_inertia_;        // I_i
   std::array<spatial::Matrix6, kBodies> inertia_, coriolis_;  // Ic, and B_i then Bc
   std::array<spatial::Vector6, kBodies> velocity_, bias_acceleration_, acceleration_;
+  std::array<spatial::Vector6, kBodies> joint_acceleration_;  // alpha_i = sum of S_c a_c
   std::array<spatial::Vector6, kBodies> bias_force_, force_;  // composite F at a = 0, and F
   std::array<spatial::Vector6, kDofs> subspace_;              // S_c
   // Per column j: u_j, w_j, z_j; the vectors its ancestors' columns dot with; and per column c

@@ -64,16 +64,25 @@
 
 #include "hmpc/humanoid/contact.hpp"
 #include "hmpc/humanoid/dynamics.hpp"
+#include "hmpc/humanoid/dynamics_derivatives.hpp"
 
 namespace hmpc::humanoid {
 
 // The end stops' torque on one joint at angle q and rate v (Parameters::stop_*), with the
 // slopes the step map treats implicitly: stiffness = -d(spring torque)/dq >= 0 and
-// damping = -d(torque)/dv >= 0.
+// damping = -d(torque)/dv >= 0; and, for the analytic linearisation, those slopes' own
+// derivatives in q (d torque/dq = -stiffness - v d damping/dq).
 struct JointStop {
   double torque = 0.0, stiffness = 0.0, damping = 0.0;
+  double stiffness_slope = 0.0, damping_slope = 0.0;  // d stiffness/dq, d damping/dq
 };
 JointStop joint_stop(double q, double v, double lower, double upper, const Parameters& parameters);
+
+// How a linearisation takes (L2)'s dr/dx: analytic (the rigid-body dynamics' derivatives,
+// the contact force's and the stops' in one pass), or by forward differences, one RNEA and
+// the contact points the column moves per column (kept as the reference the tests and the
+// benchmark compare against).
+enum class ResidualJacobian { kAnalytic, kForwardDifferences };
 
 // The step map of a variant (model.hpp). Jacobians of a step: x = (q, v) stacked (n = 29 or
 // 31), and the joints' z = (q_joints, v_joints) (the thesis's fast state, n_f = 16 or 18).
@@ -104,7 +113,8 @@ class BasicStepMap {
 
   explicit BasicStepMap(const Model& model = Model{}, const Parameters& parameters = Parameters{},
                         const ContactParameters& contact = ContactParameters{},
-                        double max_substep = 1e-3);
+                        double max_substep = 1e-3,
+                        ResidualJacobian residual = ResidualJacobian::kAnalytic);
 
   // x_{k+1} from x_k under joint torques tau held for dt (> 0), by (S1)-(S2).
   State step(const State& x, const JointVector& tau, double dt,
@@ -164,6 +174,12 @@ class BasicStepMap {
   // contact_state_, kinematics_ and the dynamics at perturbed states.
   void residual_jacobian(const State& x, const Velocity& a, double h, int first_q, int q_count,
                          int first_v, int v_count);
+  // residual_jacobian()'s two ways (ResidualJacobian): the analytic one fills every column
+  // into analytic_jacobian_ and copies the asked ones; it leaves contact_state_ and the
+  // dynamics at x.
+  void differenced_residual_jacobian(const State& x, const Velocity& a, double h, int first_q,
+                                     int q_count, int first_v, int v_count);
+  void analytic_residual_jacobian(const State& x, const Velocity& a, double h);
   // linearise()'s and linearise_joints()'s chain over the sub-steps: fx = I, fu = 0, then per
   // sub-step linearised(s, h, dh_x, dh_u) with the length's derivatives (see step.cpp).
   template <int Rates, class Jacobian, class ControlJacobian, class Linearised>
@@ -186,6 +202,7 @@ class BasicStepMap {
   Parameters parameters_;  // the end stops'
   JointVector joint_lower_, joint_upper_;
   double max_substep_;
+  ResidualJacobian residual_;
   // Workspace.
   BasicKinematics<ArmJoints> kinematics_;
   ContactState contact_state_;
@@ -198,6 +215,10 @@ class BasicStepMap {
   Eigen::Matrix<double, kDofs, kStateSize> residual_jacobian_;
   std::array<Velocity, kContactPoints> contact_terms_;  // J_i^T (f_i + h D_i J_i a) at x
   Velocity damping_acceleration_;
+  BasicDynamicsDerivatives<ArmJoints> derivatives_;
+  BasicInverseDynamicsDerivatives<ArmJoints> inverse_;
+  MassMatrix residual_by_tangent_;  // dr/dq in the tangent columns (dynamics_derivatives.hpp)
+  Eigen::Matrix<double, kDofs, kStateSize> analytic_jacobian_;
 };
 
 using State = BasicState<0>;
