@@ -2,8 +2,10 @@
 //   - the iLQR's linearisation of all N steps of the coarse problem (30 ms, N = 10, Table 2.4):
 //     dynamics Jacobians and Gauss-Newton cost derivatives, serial and on a ThreadPool of 2
 //     (thesis Sec. 2.6.2 used 10 OpenMP threads), with the step map's linearisation (sub-step
-//     chain rule, step.hpp) and with the reference (central differences of whole steps);
-//   - with --closed-loop [--motion NAME] [--threads T] [--linearisation chain-rule|reference]:
+//     chain rule, step.hpp) on analytic and on differenced residual derivatives, and with the
+//     reference (central differences of whole steps);
+//   - with --closed-loop [--motion NAME] [--threads T]
+//     [--linearisation analytic|chain-rule|reference]:
 //     every motion (or NAME, e.g. I-standing) for its file's duration under the Fine, Coarse
 //     and Coarse-Fast MPCs of Table 2.4, with and without warm start, on the 1 ms simulator:
 //     max and median solve time per 30 ms sample, solves over 30 ms, iterations, truncated
@@ -41,7 +43,15 @@ Motion standing_motion() {
 }
 
 const char* name_of(Linearisation linearisation) {
-  return linearisation == Linearisation::kSubStepChainRule ? "chain-rule" : "reference";
+  switch (linearisation) {
+    case Linearisation::kAnalytic:
+      return "analytic";
+    case Linearisation::kSubStepChainRule:
+      return "chain-rule";
+    case Linearisation::kWholeStepDifferences:
+      break;
+  }
+  return "reference";
 }
 
 // Seconds per linearisation by (Linearisation, threads).
@@ -351,7 +361,7 @@ void usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: humanoid_mpc_bench [Google Benchmark flags] [--closed-loop] [--motion NAME]\n"
-      "                          [--threads T] [--linearisation chain-rule|reference]\n");
+      "                          [--threads T] [--linearisation analytic|chain-rule|reference]\n");
 }
 
 // Real time, repeated: a truncated run depends on when each iteration ends, so its outcome
@@ -400,7 +410,8 @@ void real_time_repeats(const std::vector<std::string>& motions, int threads,
 
 BENCHMARK(BM_Linearise)
     ->ArgsProduct({{static_cast<int>(Linearisation::kWholeStepDifferences),
-                    static_cast<int>(Linearisation::kSubStepChainRule)},
+                    static_cast<int>(Linearisation::kSubStepChainRule),
+                    static_cast<int>(Linearisation::kAnalytic)},
                    {1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
@@ -410,7 +421,7 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   bool run_closed_loop = false;
   int threads = 2;
-  Linearisation linearisation = Linearisation::kSubStepChainRule;
+  Linearisation linearisation = Linearisation::kAnalytic;
   std::vector<std::string> motions = {"I-standing",    "II-walking",       "III-running",
                                       "IV-sitting",    "V-low-jump",       "VI-half-turn-jump",
                                       "VII-high-jump", "VIII-double-flip", "reaching"};
@@ -421,14 +432,14 @@ int main(int argc, char** argv) {
     return v.empty() ? std::string("--motion needs a name (e.g. I-standing)") : std::string();
   });
   parser.text("--linearisation", [&](const std::string& v) {
-    for (const Linearisation l :
-         {Linearisation::kSubStepChainRule, Linearisation::kWholeStepDifferences}) {
+    for (const Linearisation l : {Linearisation::kAnalytic, Linearisation::kSubStepChainRule,
+                                  Linearisation::kWholeStepDifferences}) {
       if (v == name_of(l)) {
         linearisation = l;
         return std::string();
       }
     }
-    return hmpc::cli::bad_value("--linearisation", "chain-rule or reference", v);
+    return hmpc::cli::bad_value("--linearisation", "analytic, chain-rule or reference", v);
   });
   parser.integer("--threads", 1, 64, threads);
   std::string error;
@@ -442,21 +453,25 @@ int main(int argc, char** argv) {
   const auto& s = seconds_per_linearisation();
   const int reference = static_cast<int>(Linearisation::kWholeStepDifferences);
   const int chain_rule = static_cast<int>(Linearisation::kSubStepChainRule);
-  if (s.size() == 4) {
+  const int analytic = static_cast<int>(Linearisation::kAnalytic);
+  if (s.size() == 6) {
+    const auto ms = [&](int l, int threads) { return s.at({l, threads}) * 1e3; };
     std::printf("\nlinearisation of N = %d coarse steps     1 thread   2 threads\n",
                 kCoarseHorizon);
-    std::printf("  reference (whole-step differences) %8.2f ms %8.2f ms\n",
-                s.at({reference, 1}) * 1e3, s.at({reference, 2}) * 1e3);
-    std::printf("  sub-step chain rule                %8.2f ms %8.2f ms\n",
-                s.at({chain_rule, 1}) * 1e3, s.at({chain_rule, 2}) * 1e3);
-    std::printf("  speed-up of the chain rule         %8.1fx    %8.1fx\n",
-                s.at({reference, 1}) / s.at({chain_rule, 1}),
-                s.at({reference, 2}) / s.at({chain_rule, 2}));
+    std::printf("  reference (whole-step differences) %8.2f ms %8.2f ms\n", ms(reference, 1),
+                ms(reference, 2));
+    std::printf("  chain rule, differenced residual   %8.2f ms %8.2f ms\n", ms(chain_rule, 1),
+                ms(chain_rule, 2));
+    std::printf("  chain rule, analytic residual      %8.2f ms %8.2f ms\n", ms(analytic, 1),
+                ms(analytic, 2));
+    std::printf("  analytic against differenced       %8.1fx    %8.1fx\n",
+                ms(chain_rule, 1) / ms(analytic, 1), ms(chain_rule, 2) / ms(analytic, 2));
+    std::printf("  analytic against the reference     %8.1fx    %8.1fx\n",
+                ms(reference, 1) / ms(analytic, 1), ms(reference, 2) / ms(analytic, 2));
     std::printf(
-        "linearisation of N = %d coarse steps (chain rule): 1 thread %.2f ms, 2 threads %.2f ms: "
+        "linearisation of N = %d coarse steps (analytic): 1 thread %.2f ms, 2 threads %.2f ms: "
         "speed-up %.2fx\n",
-        kCoarseHorizon, s.at({chain_rule, 1}) * 1e3, s.at({chain_rule, 2}) * 1e3,
-        s.at({chain_rule, 1}) / s.at({chain_rule, 2}));
+        kCoarseHorizon, ms(analytic, 1), ms(analytic, 2), ms(analytic, 1) / ms(analytic, 2));
   }
   if (run_closed_loop) {
     if (threads > 1) line_search_lanes();

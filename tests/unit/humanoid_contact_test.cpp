@@ -341,6 +341,55 @@ TEST(HumanoidContact, SittingLoadsTheSeat) {
   EXPECT_LT(x.v.head<6>().norm(), 1e-2);
 }
 
+// The analytic linearisation's contact slopes (ContactModel::force_slopes): phi = f + h D w
+// and its slopes in the position, velocity and w against central differences of force_at's
+// f and D, on sole and seat points at gaps across the softplus corner, sticking and sliding,
+// approaching and separating, and at the seat window's edge. Central differences with step
+// 1e-7 against the contact's 1 mm and 1 cm/s scales err by about (1e-7 / 1e-3)^2 = 1e-8
+// relative in truncation and eps |phi| / 1e-7 = 1e-9 N in round-off: 1e-5 of the largest
+// slope leaves a wide margin and fails any wrong term.
+TEST(HumanoidContact, ForceSlopesMatchCentralDifferences) {
+  ContactParameters parameters;
+  parameters.chair = true;
+  const ContactModel model(Model{}, Parameters{}, parameters);
+  const double h = 5e-3;
+  const auto phi = [&](int i, const Vector3& p, const Vector3& v, const Vector3& w) {
+    Matrix3 D;
+    const Vector3 f = model.force_at(i, p, v, D);
+    return Vector3(f + h * D * w);
+  };
+  int cases = 0;
+  for (const int i : {0, 5, kSolePoints, kSolePoints + 3}) {
+    const double surface = i >= kSolePoints ? parameters.seat_height : 0.0;
+    for (const double gap : {-0.01, -0.001, 0.0005, 0.003}) {
+      for (const Vector3& v : {Vector3(0.0, 0.0, 0.0), Vector3(0.003, -0.004, 0.1),
+                               Vector3(0.3, 0.2, -0.4), Vector3(-0.05, 0.4, 1.5)}) {
+        for (const double x : {0.0, parameters.seat_x_max - 0.002}) {
+          const Vector3 p(x, 0.1, surface + gap), w(0.7, -1.3, 2.1);
+          const PointForceSlopes slopes = model.force_slopes(i, p, v, w, h);
+          ASSERT_LT((slopes.force - phi(i, p, v, w)).norm(), 1e-9 * (1.0 + slopes.force.norm()));
+          Matrix3 by_position, by_velocity, by_acceleration;
+          for (int n = 0; n < 3; ++n) {
+            const Vector3 d = 1e-7 * Vector3::Unit(n);
+            by_position.col(n) = (phi(i, p + d, v, w) - phi(i, p - d, v, w)) / 2e-7;
+            by_velocity.col(n) = (phi(i, p, v + d, w) - phi(i, p, v - d, w)) / 2e-7;
+            by_acceleration.col(n) = (phi(i, p, v, w + d) - phi(i, p, v, w - d)) / 2e-7;
+          }
+          const double scale = std::max({1.0, by_position.norm(), by_velocity.norm()});
+          EXPECT_LT((slopes.by_position - by_position).norm(), 1e-5 * scale)
+              << "point " << i << " gap " << gap << " v " << v.transpose() << " x " << x;
+          EXPECT_LT((slopes.by_velocity - by_velocity).norm(), 1e-5 * scale)
+              << "point " << i << " gap " << gap << " v " << v.transpose() << " x " << x;
+          EXPECT_LT((slopes.by_acceleration - by_acceleration).norm(), 1e-5 * scale)
+              << "point " << i << " gap " << gap << " v " << v.transpose() << " x " << x;
+          ++cases;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(cases, 128);
+}
+
 // The joints' end stops (Parameters::stop_*): negligible inside the range, restoring past it.
 TEST(HumanoidJointStops, QuietInsideTheRangeAndRestoringPastIt) {
   const Parameters p;
@@ -359,6 +408,36 @@ TEST(HumanoidJointStops, QuietInsideTheRangeAndRestoringPastIt) {
   EXPECT_GT(joint_stop(upper + 0.05, -1.0, lower, upper, p).torque, past_upper.torque);
   EXPECT_TRUE(std::isfinite(joint_stop(1e6, 0.0, lower, upper, p).torque));
   EXPECT_TRUE(std::isfinite(joint_stop(-1e6, 0.0, lower, upper, p).torque));
+}
+
+// The stops' slopes: stiffness and damping are the torque's -d/dq (at zero rate) and -d/dv,
+// and stiffness_slope, damping_slope their derivatives in q, against central differences
+// (step 1e-7 against the stop's 1e-2-scale rounding width: truncation ~1e-10 relative),
+// inside the range, in the rounded corner and past either limit.
+TEST(HumanoidJointStops, SlopesMatchCentralDifferences) {
+  const Parameters p;
+  const double lower = -0.5, upper = 0.5, d = 1e-7;
+  for (const double q : {0.0, 0.49, 0.5, 0.51, 0.56, -0.495, -0.53}) {
+    for (const double v : {0.0, 1.5, -2.0}) {
+      const JointStop stop = joint_stop(q, v, lower, upper, p);
+      const JointStop plus = joint_stop(q + d, v, lower, upper, p),
+                      minus = joint_stop(q - d, v, lower, upper, p);
+      const auto near = [](double analytic, double difference) {
+        return std::abs(analytic - difference) <= 1e-5 * std::max(1.0, std::abs(difference));
+      };
+      EXPECT_TRUE(near(stop.stiffness + v * stop.damping_slope,
+                       -(plus.torque - minus.torque) / (2.0 * d)))
+          << q << " " << v;
+      EXPECT_TRUE(near(stop.damping, -(joint_stop(q, v + d, lower, upper, p).torque -
+                                       joint_stop(q, v - d, lower, upper, p).torque) /
+                                         (2.0 * d)))
+          << q << " " << v;
+      EXPECT_TRUE(near(stop.stiffness_slope, (plus.stiffness - minus.stiffness) / (2.0 * d)))
+          << q << " " << v;
+      EXPECT_TRUE(near(stop.damping_slope, (plus.damping - minus.damping) / (2.0 * d)))
+          << q << " " << v;
+    }
+  }
 }
 
 // A lifted body, every joint driven by its full torque limit towards a limit for 0.5 s, on

@@ -1,5 +1,5 @@
-// The step map's linearisation (step.hpp, (L1)-(L2): chain rule over the sub-steps, forward
-// differences of the residual r) against central differences of whole steps, through the two
+// The step map's linearisation (step.hpp, (L1)-(L2): chain rule over the sub-steps, analytic
+// derivatives of the residual r) against central differences of whole steps, through the two
 // problems' dynamics_derivatives: standing, random and seated states, in and out of contact,
 // with the rotation guard shortening sub-steps, and the fast subsystem's legs; the next state
 // is step()'s; nothing allocates.
@@ -13,10 +13,12 @@
 //     6e-6 step is 30 % off, converging to the linearisation as the step shrinks (1 % at 1e-6,
 //     1e-4 at 1e-7). There the reference is the same central difference Richardson-
 //     extrapolated from steps 4e-7 and 2e-7 (truncation O(step^4)), kRefinedTolerance.
-// The linearisation's own error is that of forward differences of r, step sqrt(eps) = 1.5e-8
-// against the contact's 1 mm length, 1.5e-5 relative; measured worst column 8e-6 against the
-// refined reference and 1.3e-5 against the reference path on these states (each test prints
-// its errors), so the tolerances leave a factor of 6 or more.
+// The linearisation's own error is round-off; the forward differences of r it replaced (kept
+// as ResidualJacobian::kForwardDifferences) erred by their step sqrt(eps) = 1.5e-8 against the
+// contact's 1 mm length, 1.5e-5 relative, 8e-6 measured against the refined reference. The
+// analytic one measures 3e-7 against the refined reference (the reference's own error) and
+// 1.9e-5 against the reference path (seated, the path's error; each test prints its errors),
+// so the tolerances leave a factor of 2.5 or more.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -248,6 +250,59 @@ TEST(HumanoidDerivatives, LegsMatchTheReference) {
     EXPECT_LT(z_error, kReferenceTolerance) << "trial " << trial;
     EXPECT_LT(u_error, kReferenceTolerance) << "trial " << trial;
   }
+}
+
+// The analytic residual derivatives (ResidualJacobian::kAnalytic, the default) against the
+// forward-differenced ones they replaced, step for step: 5 ms (one sub-step) and 30 ms steps
+// from 24 random states in the ground, sliding (feet driven sideways at up to 0.5 m/s,
+// through the friction's 1 cm/s slip velocity), lifted, seated, and with joints past their
+// stops; and the legs' (base held). The differenced ones carry forward-difference error,
+// 1.5e-5 relative (the file comment): the tolerance kReferenceTolerance leaves a factor 6.
+TEST(HumanoidDerivatives, AnalyticMatchesTheDifferencedChainRule) {
+  const Model limits;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  double worst = 0.0;
+  for (int trial = 0; trial < 24; ++trial) {
+    ContactParameters contact;
+    contact.chair = trial % 6 == 3;
+    State x = random_state(rng, trial % 6 == 1 ? 0.05 : 0.0);
+    if (trial % 6 == 2) x.v.segment<2>(3) = 0.5 * Eigen::Vector2d(unit(rng), unit(rng));
+    if (contact.chair) {
+      x.q.tail<kJoints>() << 0.0, 1.5, 1.5, 0.0, 0.0, 1.5, 1.5, 0.0;
+      x.q[0] = 0.0;
+      x.q[2] = contact.seat_height + contact.ischium_below_hip - 0.005;
+    }
+    if (trial % 6 == 4) {
+      x.q[7 + kKnee] = limits.joint_lower[kKnee] - 0.03 * std::abs(unit(rng));
+      x.q[7 + kJointsPerLeg + kHipFlexion] = limits.joint_upper[kHipFlexion] + 0.02 * unit(rng);
+    }
+    const JointVector tau = random_torques(rng);
+    StepMap analytic(Model{}, Parameters{}, contact, 5e-3, ResidualJacobian::kAnalytic);
+    StepMap differenced(Model{}, Parameters{}, contact, 5e-3,
+                        ResidualJacobian::kForwardDifferences);
+    for (const double dt : {5e-3, 0.03}) {
+      StepJacobian fx, fx_differenced;
+      StepControlJacobian fu, fu_differenced;
+      analytic.linearise(x, tau, dt, fx, fu);
+      differenced.linearise(x, tau, dt, fx_differenced, fu_differenced);
+      const double fx_error = worst_column_error(fx, fx_differenced),
+                   fu_error = worst_column_error(fu, fu_differenced);
+      EXPECT_LT(fx_error, kReferenceTolerance) << "trial " << trial << ", dt " << dt;
+      EXPECT_LT(fu_error, kReferenceTolerance) << "trial " << trial << ", dt " << dt;
+      worst = std::max({worst, fx_error, fu_error});
+    }
+    JointStepJacobian fz, fz_differenced;
+    JointControlJacobian fl, fl_differenced;
+    analytic.linearise_joints(x, tau, 0.01, fz, fl);
+    differenced.linearise_joints(x, tau, 0.01, fz_differenced, fl_differenced);
+    const double legs_error = std::max(worst_column_error(fz, fz_differenced),
+                                       worst_column_error(fl, fl_differenced));
+    EXPECT_LT(legs_error, kReferenceTolerance) << "trial " << trial;
+    worst = std::max(worst, legs_error);
+  }
+  std::printf("analytic against differenced residual derivatives: worst column error %.1e\n",
+              worst);
 }
 
 TEST(HumanoidDerivatives, LinearisedStepIsTheStep) {

@@ -15,8 +15,9 @@
 // 2012); l_xx stays positive semi-definite where the exact Hessian of the angle terms would
 // not, and it costs 2n residual evaluations instead of the n^2 of a full difference Hessian.
 // The dynamics Jacobians are the step map's own linearisation (StepMap::linearise: the chain
-// rule over its sub-steps), or central differences of whole steps (ProblemBase's default),
-// kept as the reference (ProblemConfig::linearisation).
+// rule over its sub-steps, each sub-step's residual derivatives analytic or, as before them,
+// forward differences), or central differences of whole steps (ProblemBase's default); the
+// last two are kept as references (ProblemConfig::linearisation).
 //
 // Where the thesis leaves a definition open (Fig. 4.2 is not in the text):
 //   - base: p_z^r and v^r are the height and world velocity of a point fixed on the torso,
@@ -69,8 +70,9 @@ BasicState<A> to_state(const BasicStateVector<A>& x) {
                        x.template tail<Dimensions<A>::kDofs>()};
 }
 
-// How the problems linearise the step map (see the file comment).
-enum class Linearisation { kSubStepChainRule, kWholeStepDifferences };
+// How the problems linearise the step map (see the file comment): the sub-step chain rule with
+// analytic residual derivatives, the same with differenced ones, or whole-step differences.
+enum class Linearisation { kAnalytic, kSubStepChainRule, kWholeStepDifferences };
 
 struct ProblemConfig {
   double step = 0.03;  // Delta t of the model [s]: 30 ms coarse, 10 ms fine (Table 2.4)
@@ -89,7 +91,7 @@ struct ProblemConfig {
   Vector3 base_point = Vector3(0.0, 0.0, 0.07);
   Parameters parameters{};
   ContactParameters contact{};
-  Linearisation linearisation = Linearisation::kSubStepChainRule;
+  Linearisation linearisation = Linearisation::kAnalytic;
   // Line-search rollouts run at once on a pool with a second thread (rollout_lanes in
   // hmpc/solver/problem.hpp): 2, or 1 for one at a time (the benchmark's comparison); the
   // solution is the same either way.
@@ -195,7 +197,10 @@ class StepMapProblem : public ProblemBase<Derived, double, Nx, Nu> {
   StepMapProblem(const ProblemConfig& config, ThreadPool* pool)
       : pool_(pool), lanes_(config.line_search_lanes) {
     const BasicModel<A> model(config.parameters);
-    step_maps_.fill(BasicStepMap<A>(model, config.parameters, config.contact, config.max_substep));
+    step_maps_.fill(BasicStepMap<A>(model, config.parameters, config.contact, config.max_substep,
+                                    config.linearisation == Linearisation::kSubStepChainRule
+                                        ? ResidualJacobian::kForwardDifferences
+                                        : ResidualJacobian::kAnalytic));
     lane_map_ = step_maps_[0];
   }
   BasicStepMap<A>& step_map(int t) const { return step_maps_[t]; }

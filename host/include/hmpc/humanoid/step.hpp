@@ -42,20 +42,25 @@
 //   r(x') = b(x') - A(x') a
 //         = S^T tau + tau_ext - (M(q') a + c(q', v')) + sum_i J_i^T (f_i + h D_i J_i a)  (L2)
 //           + S^T (tau_stop - h K qdot - (h B + h^2 K) a_joints)  (at q', v')
-// with J_i, f_i, D_i at x' = (q', v'). M a + c is one RNEA call, so a column of dr/dx costs
-// no CRBA and no factorisation (the nominal Cholesky of A serves every column); a v column
-// needs no kinematics (J depends on q only), a base translation changes only the contact
-// forces, and a joint's column re-evaluates only the contact points its joint carries. The
-// columns are forward differences (step sqrt(eps)): half the work of central ones, for a
-// relative error near 1e-5 (contact's 1 mm length against the 1.5e-8 step), below what
-// central differences of whole steps reach in stiff contact (humanoid_derivatives_test).
+// with J_i, f_i, D_i at x' = (q', v'). dr/dx is analytic (ResidualJacobian::kAnalytic): the
+// RNEA's derivatives in q and v (dynamics_derivatives.hpp), each point's
+// phi_i = f_i + h D_i J_i a with its exact slopes in the point's position, velocity and J_i a
+// (ContactModel::force_slopes, D_i's own derivatives included), carried through the point
+// Jacobians' derivatives (add_point_force_derivatives), and the stops' slopes; taken in the
+// tangent directions and mapped to q's coordinates (the world position through R^T, the
+// quaternion through tangent_of_quaternion). Its columns are exact to round-off, and cost one
+// recursive pass and a few 3-vector products per point, against one RNEA per column (and the
+// kinematics and contact points a column moves) for the forward differences it replaced,
+// kept as ResidualJacobian::kForwardDifferences: step sqrt(eps), a relative error near 1e-5
+// (contact's 1 mm length against the 1.5e-8 step). The nominal Cholesky of A serves every
+// column in either way (humanoid_derivatives_test compares them).
 // The torque columns are exact. (S2) is differentiated analytically except in the
 // quaternion and omega+, by central differences of (S2) alone. dh: where the rotation guard
 // shortens a sub-step, h = kMaxRotation / rate depends on the state, and the last sub-step
 // takes what is left of dt; their derivatives enter the chain (dh = 0 for fixed lengths).
 // Central differences of whole steps (ProblemBase's default, kept as the reference) instead
 // run two complete steps per column, every sub-step with its CRBA and Cholesky: for a 30 ms
-// step of 6 sub-steps, 444 sub-steps against 6 sub-steps and 174 evaluations of r.
+// step of 6 sub-steps, 444 sub-steps against 6 sub-steps and their 6 residual derivatives.
 //
 // No call allocates. One instance per thread (it owns a Dynamics workspace).
 #pragma once
