@@ -44,12 +44,9 @@ Motion standing_motion() {
 
 const char* name_of(Linearisation linearisation) {
   switch (linearisation) {
-    case Linearisation::kAnalytic:
-      return "analytic";
-    case Linearisation::kSubStepChainRule:
-      return "chain-rule";
-    case Linearisation::kWholeStepDifferences:
-      break;
+    case Linearisation::kAnalytic: return "analytic";
+    case Linearisation::kSubStepChainRule: return "chain-rule";
+    case Linearisation::kWholeStepDifferences: break;
   }
   return "reference";
 }

@@ -425,8 +425,8 @@ TEST(HumanoidJointStops, SlopesMatchCentralDifferences) {
       const auto near = [](double analytic, double difference) {
         return std::abs(analytic - difference) <= 1e-5 * std::max(1.0, std::abs(difference));
       };
-      EXPECT_TRUE(near(stop.stiffness + v * stop.damping_slope,
-                       -(plus.torque - minus.torque) / (2.0 * d)))
+      EXPECT_TRUE(
+          near(stop.stiffness + v * stop.damping_slope, -(plus.torque - minus.torque) / (2.0 * d)))
           << q << " " << v;
       EXPECT_TRUE(near(stop.damping, -(joint_stop(q, v + d, lower, upper, p).torque -
                                        joint_stop(q, v - d, lower, upper, p).torque) /

@@ -296,8 +296,8 @@ TEST(HumanoidDerivatives, AnalyticMatchesTheDifferencedChainRule) {
     JointControlJacobian fl, fl_differenced;
     analytic.linearise_joints(x, tau, 0.01, fz, fl);
     differenced.linearise_joints(x, tau, 0.01, fz_differenced, fl_differenced);
-    const double legs_error = std::max(worst_column_error(fz, fz_differenced),
-                                       worst_column_error(fl, fl_differenced));
+    const double legs_error =
+        std::max(worst_column_error(fz, fz_differenced), worst_column_error(fl, fl_differenced));
     EXPECT_LT(legs_error, kReferenceTolerance) << "trial " << trial;
     worst = std::max(worst, legs_error);
   }
