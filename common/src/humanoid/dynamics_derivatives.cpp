@@ -208,42 +208,51 @@ void BasicDynamicsDerivatives<A>::add_point_force_derivatives(int body, const Ve
                                                               const PointForceSlopes& slopes,
                                                               MassMatrix& dq,
                                                               MassMatrix& dv) const {
-  // The point's Jacobian columns J_c = P(p) S_c over its chain (the others are zero).
-  const auto point_velocity = [&p](const Vector6& twist) -> Vector3 {
-    return twist.tail<3>() + twist.head<3>().cross(p);
+  // The point's chain of columns, from its body's to the root's, and there J_c = P(p) S_c
+  // and w_c (the other columns of J are zero).
+  const auto point_velocity = [&p](const Vector3& angular, const Vector3& linear) -> Vector3 {
+    return linear + angular.cross(p);
   };
   std::array<int, kDofs> chain;
+  std::array<Vector3, kDofs> J, w;
   int length = 0;
   for (int b = body; b >= 0; b = model_.bodies[b].parent) {
-    for (int c = first_column(b) + column_count(b) - 1; c >= first_column(b); --c)
-      chain[length++] = c;
+    for (int c = first_column(b) + column_count(b) - 1; c >= first_column(b); --c) {
+      chain[length] = c;
+      w[length] = subspace_[c].template head<3>();
+      J[length] = point_velocity(w[length], subspace_[c].template tail<3>());
+      ++length;
+    }
   }
-  std::array<Vector3, kDofs> J;
-  for (int n = 0; n < length; ++n) J[chain[n]] = point_velocity(subspace_[chain[n]]);
   const Vector3& phi = slopes.force;
   const Vector3 omega = velocity_[body].template head<3>(),
                 alpha = joint_acceleration_[body].template head<3>();
-  // chain runs from the point's body to the root, so the columns at or below j come before j's.
   for (int n = 0; n < length; ++n) {
-    const int j = chain[n], root = body_of(j), parent = model_.bodies[root].parent;
-    const Vector6& S = subspace_[j];
-    const Vector3& dp = J[j];
-    const Vector6 dv_rel = root == 0 ? velocity_[body] : velocity_[body] - velocity_[parent];
-    const Vector6 da_rel = root == 0 ? joint_acceleration_[body]
-                                     : joint_acceleration_[body] - joint_acceleration_[parent];
-    const Vector3 dvelocity = omega.cross(dp) + point_velocity(cross_motion(S, dv_rel));
-    const Vector3 dacceleration = alpha.cross(dp) + point_velocity(cross_motion(S, da_rel));
+    const int j = chain[n], root = body_of(j);
+    const Vector3& dp = J[n];
+    // S_j x (v_body - v_p), and the same for alpha (v_p = 0 for the base).
+    Vector6 dv_rel = velocity_[body], da_rel = joint_acceleration_[body];
+    if (root != 0) {
+      dv_rel -= velocity_[model_.bodies[root].parent];
+      da_rel -= joint_acceleration_[model_.bodies[root].parent];
+    }
+    const Vector6 turned_velocity = cross_motion(subspace_[j], dv_rel),
+                  turned_acceleration = cross_motion(subspace_[j], da_rel);
+    const Vector3 dvelocity =
+        omega.cross(dp) + point_velocity(turned_velocity.template head<3>(),
+                                         turned_velocity.template tail<3>());
+    const Vector3 dacceleration =
+        alpha.cross(dp) + point_velocity(turned_acceleration.template head<3>(),
+                                         turned_acceleration.template tail<3>());
     const Vector3 chi = slopes.by_position * dp + slopes.by_velocity * dvelocity +
                         slopes.by_acceleration * dacceleration;
-    const Vector3 turned = chi + phi.cross(S.head<3>()), moment = dp.cross(phi);
+    const Vector3 turned = chi + phi.cross(w[n]), moment = dp.cross(phi);
     const Vector3 phi_v = slopes.by_velocity * dp;  // phi_v J_j
-    for (int m = 0; m < length; ++m) {
-      const int c = chain[m];
-      dq(c, j) += in_subtree_[root * kBodies + body_of(c)]
-                      ? J[c].dot(turned)
-                      : J[c].dot(chi) + subspace_[c].template head<3>().dot(moment);
-      dv(c, j) += J[c].dot(phi_v);
-    }
+    // The chain's columns at or below j: those before it, or all of it for a base column.
+    const int below = root == 0 ? length : n + 1;
+    for (int m = 0; m < below; ++m) dq(chain[m], j) += J[m].dot(turned);
+    for (int m = below; m < length; ++m) dq(chain[m], j) += J[m].dot(chi) + w[m].dot(moment);
+    for (int m = 0; m < length; ++m) dv(chain[m], j) += J[m].dot(phi_v);
   }
 }
 
