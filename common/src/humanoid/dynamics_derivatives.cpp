@@ -238,9 +238,8 @@ void BasicDynamicsDerivatives<A>::add_point_force_derivatives(int body, const Ve
     }
     const Vector6 turned_velocity = cross_motion(subspace_[j], dv_rel),
                   turned_acceleration = cross_motion(subspace_[j], da_rel);
-    const Vector3 dvelocity =
-        omega.cross(dp) + point_velocity(turned_velocity.template head<3>(),
-                                         turned_velocity.template tail<3>());
+    const Vector3 dvelocity = omega.cross(dp) + point_velocity(turned_velocity.template head<3>(),
+                                                               turned_velocity.template tail<3>());
     const Vector3 dacceleration =
         alpha.cross(dp) + point_velocity(turned_acceleration.template head<3>(),
                                          turned_acceleration.template tail<3>());
