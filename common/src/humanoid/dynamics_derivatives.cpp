@@ -47,11 +47,11 @@ Matrix6 coriolis_matrix(const Vector6& v, const Matrix6& I, const Vector6& h) {
 }  // namespace
 
 template <int A>
-void BasicDynamicsDerivatives<A>::velocity_pass(const Configuration& q, const Velocity& v) {
-  // World poses (R_i body to world, p_i the body origin) by dynamics.hpp's kinematics.
-  dynamics_.kinematics(q, v, kinematics_);
-  const auto& rotation = kinematics_.rotation;
-  const auto& position = kinematics_.position;
+void BasicDynamicsDerivatives<A>::velocity_pass(const BasicKinematics<A>& kinematics,
+                                                const Velocity& v) {
+  // World poses: R_i body to world, p_i the body origin.
+  const auto& rotation = kinematics.rotation;
+  const auto& position = kinematics.position;
   for (int i = 0; i < kBodies; ++i) {
     // The world inertia about the world origin: the body's mass at its CoM in world
     // coordinates, its central inertia rotated into the world. Body to world motion transform
@@ -157,7 +157,15 @@ template <int A>
 void BasicDynamicsDerivatives<A>::inverse_dynamics_derivatives(const Configuration& q,
                                                                const Velocity& v, const Velocity& a,
                                                                Derivatives& out) {
-  velocity_pass(q, v);
+  dynamics_.kinematics(q, v, kinematics_);
+  inverse_dynamics_derivatives(kinematics_, v, a, out);
+}
+
+template <int A>
+void BasicDynamicsDerivatives<A>::inverse_dynamics_derivatives(const BasicKinematics<A>& kinematics,
+                                                               const Velocity& v, const Velocity& a,
+                                                               Derivatives& out) {
+  velocity_pass(kinematics, v);
   acceleration_pass(a);
   derivative_columns(a, out);
 }
@@ -168,7 +176,8 @@ void BasicDynamicsDerivatives<A>::forward_dynamics_derivatives(
     BasicForwardDynamicsDerivatives<A>& out) {
   // The velocity pass gives the bias forces c_c = S_c^T F0 and, from the composite inertias,
   // M (the CRBA in world coordinates): M_c'c = S_c'^T Ic S_c for c' at or above c.
-  velocity_pass(q, v);
+  dynamics_.kinematics(q, v, kinematics_);
+  velocity_pass(kinematics_, v);
   Velocity bias;
   for (int c = 0; c < kDofs; ++c) {
     const int body = body_of(c);

@@ -246,8 +246,8 @@ void BasicStepMap<A>::residual_jacobian(const State& x, const Velocity& a, doubl
 
 template <int A>
 void BasicStepMap<A>::analytic_residual_jacobian(const State& x, const Velocity& a, double h) {
-  // (L2)'s dynamics term -RNEA(q, v, a).
-  derivatives_.inverse_dynamics_derivatives(x.q, x.v, a, inverse_);
+  // (L2)'s dynamics term -RNEA(q, v, a); kinematics_ is at x (acceleration()).
+  derivatives_.inverse_dynamics_derivatives(kinematics_, x.v, a, inverse_);
   residual_by_tangent_ = -inverse_.dtau_dq;
   MassMatrix by_velocity = -inverse_.dtau_dv;
   // The contact terms J_i^T phi_i, phi_i = f_i + h D_i J_i a, and d(b - A a)/dh's

@@ -76,6 +76,10 @@ class BasicDynamicsDerivatives {
 
   void inverse_dynamics_derivatives(const Configuration& q, const Velocity& v, const Velocity& a,
                                     Derivatives& out);
+  // The same from the bodies' poses at q (dynamics.hpp's kinematics), for a caller that has
+  // them already.
+  void inverse_dynamics_derivatives(const BasicKinematics<ArmJoints>& kinematics, const Velocity& v,
+                                    const Velocity& a, Derivatives& out);
   void forward_dynamics_derivatives(const Configuration& q, const Velocity& v, const Velocity& tau,
                                     BasicForwardDynamicsDerivatives<ArmJoints>& out);
 
@@ -97,7 +101,7 @@ class BasicDynamicsDerivatives {
   // The world-frame RNEA in two parts, kept for the derivatives: what q and v give (poses,
   // subspaces, velocities, the bias accelerations and forces at a = 0, B, the composite
   // inertias), then what the accelerations add (a_i, the composite forces F).
-  void velocity_pass(const Configuration& q, const Velocity& v);
+  void velocity_pass(const BasicKinematics<ArmJoints>& kinematics, const Velocity& v);
   void acceleration_pass(const Velocity& a);
   void derivative_columns(const Velocity& a, Derivatives& out);
 
@@ -115,8 +119,8 @@ class BasicDynamicsDerivatives {
   static constexpr int column_count(int body) { return body == 0 ? kBaseDofs : 1; }
 
   Model model_;
-  BasicDynamics<ArmJoints> dynamics_;  // its kinematics: the bodies' world poses
-  BasicKinematics<ArmJoints> kinematics_;
+  BasicDynamics<ArmJoints> dynamics_;       // its kinematics: the bodies' world poses
+  BasicKinematics<ArmJoints> kinematics_;   // for the calls given q
   BasicMassMatrix<ArmJoints> mass_matrix_;  // M and its factorisation, for forward dynamics
   Eigen::LLT<BasicMassMatrix<ArmJoints>> cholesky_{BasicMassMatrix<ArmJoints>::Identity()};
   Derivatives inverse_;
