@@ -30,17 +30,24 @@ inline Matrix6 motion_transform(const Matrix3& E, const Vector3& r) {
   return X;
 }
 
+// a x b of the 3-vectors starting at a[i] and b[j], written out (Eigen's formula, so the same
+// numbers): Eigen's cross on 3-blocks of 6-vectors is a call the compiler does not inline.
+EIGEN_ALWAYS_INLINE Vector3 cross3(const Vector6& a, int i, const Vector6& b, int j) {
+  return Vector3(a[i + 1] * b[j + 2] - a[i + 2] * b[j + 1], a[i + 2] * b[j] - a[i] * b[j + 2],
+                 a[i] * b[j + 1] - a[i + 1] * b[j]);
+}
+
 // Cross products for motion (v x m, crm) and force (v x* f, crf = -crm^T).
 EIGEN_ALWAYS_INLINE Vector6 cross_motion(const Vector6& v, const Vector6& m) {
   Vector6 out;
-  out.head<3>() = v.head<3>().cross(m.head<3>());
-  out.tail<3>() = v.head<3>().cross(m.tail<3>()) + v.tail<3>().cross(m.head<3>());
+  out.head<3>() = cross3(v, 0, m, 0);
+  out.tail<3>() = cross3(v, 0, m, 3) + cross3(v, 3, m, 0);
   return out;
 }
 EIGEN_ALWAYS_INLINE Vector6 cross_force(const Vector6& v, const Vector6& f) {
   Vector6 out;
-  out.head<3>() = v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>());
-  out.tail<3>() = v.head<3>().cross(f.tail<3>());
+  out.head<3>() = cross3(v, 0, f, 0) + cross3(v, 3, f, 3);
+  out.tail<3>() = cross3(v, 0, f, 3);
   return out;
 }
 
