@@ -117,6 +117,7 @@ struct RunResult {
   double fell_at = -1.0;
   bool passed = false;
   std::string outcome;
+  std::string verdict;  // the physical check's, when the run did not fall
 };
 template <int A>
 RunResult run_once(const std::string& file, const Motion& motion, const ClosedLoopConfig& config) {
@@ -124,11 +125,13 @@ RunResult run_once(const std::string& file, const Motion& motion, const ClosedLo
   const ClosedLoopSummary s = summarise(run);
   char outcome[160];
   bool passed = false;
+  std::string verdict;
   if (run.fell()) {
     std::snprintf(outcome, sizeof outcome, "fell at %.2f s", run.fell_at);
   } else if constexpr (A == 1) {
     const PhysicalCheck check = check_reaching(motion, run);
     passed = check.passed;
+    verdict = check.verdict;
     const ReachFigures f = reach_figures(motion, run);
     std::snprintf(outcome, sizeof outcome,
                   "check %s, hand %.3f m off %.2f s after the start, within 5 cm after %.2f s",
@@ -136,10 +139,11 @@ RunResult run_once(const std::string& file, const Motion& motion, const ClosedLo
   } else {
     const PhysicalCheck check = check_motion(motion_numeral(file), motion, run);
     passed = check.passed;
+    verdict = check.verdict;
     std::snprintf(outcome, sizeof outcome, "check %s, base %.2f-%.2f m",
                   check.passed ? "passed" : "FAILED", s.min_height, s.max_height);
   }
-  return {s, run.fell_at, passed, outcome};
+  return {s, run.fell_at, passed, outcome, verdict};
 }
 RunResult run_once(const std::string& file, const Motion& motion, const ClosedLoopConfig& config) {
   return motion.reach.active ? run_once<1>(file, motion, config)
@@ -382,6 +386,7 @@ void checks_over_starts(const std::vector<std::string>& motions, int nudges, int
   for (const std::string& file : motions) {
     const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
     int passed[2] = {0, 0};
+    std::string failures;
     for (int start = 0; start <= nudges; ++start) {
       const double angle = 2.0 * kPi * start / std::max(1, nudges);
       for (const Linearisation l : {Linearisation::kSubStepChainRule, Linearisation::kAnalytic}) {
@@ -391,15 +396,20 @@ void checks_over_starts(const std::vector<std::string>& motions, int nudges, int
         config.problem.linearisation = l;
         if (start > 0)
           config.initial_velocity = 0.01 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
-        passed[l == Linearisation::kAnalytic ? 1 : 0] +=
-            run_once(file, motion, config).passed ? 1 : 0;
+        const RunResult run = run_once(file, motion, config);
+        passed[l == Linearisation::kAnalytic ? 1 : 0] += run.passed ? 1 : 0;
+        if (!run.passed) {
+          char line[64];
+          std::snprintf(line, sizeof line, "    %s, start %d: ", name_of(l), start);
+          failures += line + (run.verdict.empty() ? run.outcome : run.verdict) + "\n";
+        }
       }
     }
     runs += nudges + 1;
     total[0] += passed[0];
     total[1] += passed[1];
-    std::printf("%-18s %9d/%-2d %9d/%-2d\n", file.c_str(), passed[0], nudges + 1, passed[1],
-                nudges + 1);
+    std::printf("%-18s %9d/%-2d %9d/%-2d\n%s", file.c_str(), passed[0], nudges + 1, passed[1],
+                nudges + 1, failures.c_str());
     std::fflush(stdout);
   }
   std::printf("%-18s %9d/%-2d %9d/%-2d\n", "all", total[0], runs, total[1], runs);
