@@ -1,5 +1,6 @@
 // Smooth contact and the step map (contact.hpp, step.hpp): standing load, landing, friction
-// cone, chair, robustness at extreme states, and no allocation in step().
+// cone, chair, robustness at extreme states, no allocation in step(), and the slopes of the
+// contact force and the end stops that the analytic linearisation uses.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
