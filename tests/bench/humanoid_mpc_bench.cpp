@@ -21,11 +21,15 @@
 //     with timing): checks passed and samples over 30 ms;
 //   - with --check-starts K [--motion NAME]: each motion's physical check under Coarse-Fast
 //     (untruncated, as in ctest) from rest and from K starts drifting at 1 cm/s, with the
-//     differenced and the analytic linearisation: how many runs passed.
+//     differenced and the analytic linearisation: how many runs passed;
+//   - with --substep-error: the MPC model's one-step prediction error against the 1 ms
+//     simulator, and its linearisation time, for sub-steps of 1 to 15 ms.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <array>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -366,7 +370,7 @@ void usage(std::FILE* out) {
       out,
       "usage: humanoid_mpc_bench [Google Benchmark flags] [--closed-loop] [--motion NAME]\n"
       "                          [--threads T] [--linearisation analytic|chain-rule|reference]\n"
-      "                          [--check-starts K]\n");
+      "                          [--check-starts K] [--substep-error]\n");
 }
 
 // The motion checks from nudged starts: Coarse-Fast, warm-started and untruncated (the ctest
@@ -413,6 +417,62 @@ void checks_over_starts(const std::vector<std::string>& motions, int nudges, int
     std::fflush(stdout);
   }
   std::printf("%-18s %9d/%-2d %9d/%-2d\n", "all", total[0], runs, total[1], runs);
+}
+
+// What a coarser model costs in prediction (fewer sub-steps make the linearisation cheaper):
+// from every 30 ms sample of Coarse-Fast closed loops (untruncated) on standing, walking,
+// running and the low jump, one 30 ms step under the sample's torque with the MPC model's
+// sub-step h, against the same step on the simulator's 1 ms: base position, attitude and
+// joint-angle errors (median and 95th percentile over the samples), and the analytic
+// linearisation's time per 30 ms step at each h, in the same run.
+void substep_error() {
+  const std::vector<std::string> motions = {"I-standing", "II-walking", "III-running",
+                                            "V-low-jump"};
+  std::vector<std::pair<State, JointVector>> starts;
+  for (const std::string& file : motions) {
+    const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
+    ClosedLoopConfig config;
+    config.truncate = false;
+    const ClosedLoopRun run = run_closed_loop(motion, config);
+    for (std::size_t k = 0; k + 1 < run.samples.size(); ++k) {
+      starts.emplace_back(run.samples[k].state, run.samples[k + 1].torque);
+    }
+  }
+  constexpr double kStep = 0.03;
+  StepMap reference(Model{}, Parameters{}, ContactParameters{}, 1e-3);
+  std::vector<State> truth;
+  for (const auto& [x, tau] : starts) truth.push_back(reference.step(x, tau, kStep));
+  const auto percentile = [](std::vector<double> v, double p) {
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(p * v.size()))];
+  };
+  std::printf(
+      "\nOne 30 ms step of the MPC's model against the 1 ms simulator, from %zu closed-loop "
+      "samples (standing, walking, running, low jump): median / 95th percentile\n",
+      starts.size());
+  std::printf("%8s %22s %22s %22s %14s\n", "h [ms]", "base position [mm]", "attitude [mrad]",
+              "joints RMS [mrad]", "linearise [us]");
+  for (const double h : {1e-3, 2.5e-3, 5e-3, 7.5e-3, 10e-3, 15e-3}) {
+    StepMap model(Model{}, Parameters{}, ContactParameters{}, h);
+    std::vector<double> position, attitude, joints;
+    StepJacobian fx;
+    StepControlJacobian fu;
+    const auto begin = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < starts.size(); ++i) {
+      const State x = model.linearise(starts[i].first, starts[i].second, kStep, fx, fu);
+      position.push_back((x.q.head<3>() - truth[i].q.head<3>()).norm() * 1e3);
+      const double dot = std::min(1.0, std::abs(x.q.segment<4>(3).dot(truth[i].q.segment<4>(3))));
+      attitude.push_back(2.0 * std::acos(dot) * 1e3);
+      joints.push_back((x.q.tail<kJoints>() - truth[i].q.tail<kJoints>()).norm() /
+                       std::sqrt(static_cast<double>(kJoints)) * 1e3);
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+    std::printf("%8.1f %10.3f / %9.3f %10.3f / %9.3f %10.3f / %9.3f %14.1f\n", h * 1e3,
+                percentile(position, 0.5), percentile(position, 0.95), percentile(attitude, 0.5),
+                percentile(attitude, 0.95), percentile(joints, 0.5), percentile(joints, 0.95),
+                seconds / starts.size() * 1e6);
+  }
 }
 
 // Real time, repeated: a truncated run depends on when each iteration ends, so its outcome
@@ -495,6 +555,8 @@ int main(int argc, char** argv) {
   parser.integer("--threads", 1, 64, threads);
   int check_starts = 0;
   parser.integer("--check-starts", 1, 64, check_starts);
+  bool run_substep_error = false;
+  parser.flag("--substep-error", run_substep_error);
   std::string error;
   const auto outcome = parser.parse(argc, argv, error);
   if (outcome != hmpc::cli::ParseOutcome::kRun) {
@@ -527,6 +589,7 @@ int main(int argc, char** argv) {
         kCoarseHorizon, ms(analytic, 1), ms(analytic, 2), ms(analytic, 1) / ms(analytic, 2));
   }
   if (check_starts > 0) checks_over_starts(motions, check_starts, threads);
+  if (run_substep_error) substep_error();
   if (run_closed_loop) {
     if (threads > 1) line_search_lanes();
     const AtRest at_rest = closed_loop(motions, threads, linearisation);
