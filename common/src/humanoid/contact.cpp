@@ -178,16 +178,15 @@ PointForceSlopes BasicContactModel<A>::force_slopes(int i, const Vector3& positi
   PointForceSlopes out;
   out.force.head<2>() = -mu * normal * (t / r + h * E);
   out.force.z() = normal + h * d_zz * w.z();
-  // Each of (x, gap, v_z) moves F_n and D_zz; gap is p_z and x is p_x.
+  // Each of (x, gap, v_z) moves F_n and D_zz; x is p_x and gap is p_z.
   const Eigen::Vector2d by_normal = -mu * (t / r + h * E);
-  Vector3 slope;
-  for (int n = 0; n < 3; ++n) {
-    slope.head<2>() = by_normal * dnormal[n];
-    slope.z() = dnormal[n] + h * dd_zz[n] * w.z();
-    if (n == 0) out.by_position.col(0) = slope;
-    if (n == 1) out.by_position.col(2) = slope;
-    if (n == 2) out.by_velocity.col(2) = slope;
-  }
+  const auto slope = [&](int n) {
+    return Vector3(by_normal.x() * dnormal[n], by_normal.y() * dnormal[n],
+                   dnormal[n] + h * dd_zz[n] * w.z());
+  };
+  out.by_position.col(0) = slope(0);
+  out.by_position.col(2) = slope(1);
+  out.by_velocity.col(2) = slope(2);
   out.by_velocity.topLeftCorner<2, 2>() = -mu * normal * (Q + h * dE);
   out.by_acceleration.topLeftCorner<2, 2>() = -h * mu * normal * Q;
   out.by_acceleration(2, 2) = h * d_zz;
