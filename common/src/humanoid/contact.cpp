@@ -77,9 +77,13 @@ BasicContactModel<A>::BasicContactModel(const Model& model, const Parameters& p,
 }
 
 template <int A>
-double BasicContactModel<A>::seat_window(double x) const {
+double BasicContactModel<A>::seat_window(double x, double* slope) const {
   const double w = contact_.seat_edge;
-  return logistic((x - contact_.seat_x_min) / w) * logistic((contact_.seat_x_max - x) / w);
+  const double left = logistic((x - contact_.seat_x_min) / w),
+               right = logistic((contact_.seat_x_max - x) / w);
+  // logistic' = sigma (1 - sigma).
+  if (slope != nullptr) *slope = (left * (1.0 - left) * right - left * right * (1.0 - right)) / w;
+  return left * right;
 }
 
 template <int A>
@@ -143,15 +147,9 @@ PointForceSlopes BasicContactModel<A>::force_slopes(int i, const Vector3& positi
   const double s = c.smoothing, eps = c.clamp_smoothing, k = c.stiffness, mu = c.friction;
   const bool seat = i >= kSolePoints;
   const double gap = seat ? position.z() - c.seat_height : position.z();
-  // The seat window S(x) and S'(x) (logistic' = sigma (1 - sigma)); 1 and 0 on the soles.
-  double scale = 1.0, dscale = 0.0;
-  if (seat) {
-    const double e = c.seat_edge;
-    const double left = logistic((position.x() - c.seat_x_min) / e),
-                 right = logistic((c.seat_x_max - position.x()) / e);
-    scale = left * right;
-    dscale = (left * (1.0 - left) * right - left * right * (1.0 - right)) / e;
-  }
+  // The seat window S(x) and S'(x); 1 and 0 on the soles.
+  double dscale = 0.0;
+  const double scale = seat ? seat_window(position.x(), &dscale) : 1.0;
   // (C1), (C2) and their slopes: d depth/dgap = -sigma_d, dg/dv_z = -c sigma_g.
   const double depth = s * softplus(-gap / s), sigma_d = logistic(-gap / s);
   const double y = 1.0 - c.damping * velocity.z();

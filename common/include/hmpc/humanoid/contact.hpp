@@ -140,7 +140,8 @@ class BasicContactModel {
   Vector3 point_force(double gap, const Vector3& velocity, double scale, Matrix3* dforce) const;
 
  private:
-  double seat_window(double x) const;
+  // The seat's window S(x) of the seat's x-range, and S'(x) into `slope` if given.
+  double seat_window(double x, double* slope = nullptr) const;
 
   Model model_;
   ContactParameters contact_;
