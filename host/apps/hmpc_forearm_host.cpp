@@ -1,7 +1,9 @@
 // hmpc-forearm-host: the host forearm controller. Drives one forearm board over CAN
 // (ForearmCanMaster: heartbeat, mode and strategy, target trajectory streaming), logs what the
-// board reports, and bridges to Cyclone DDS: publishes the board's state and MPC telemetry,
-// takes validated commands (mode, strategy, target) from operators (hmpc-forearm-cli).
+// board reports, and bridges to Cyclone DDS with ROS 2's types (hmpc/dds/forearm_dds.hpp):
+// publishes the board's joint state, MPC telemetry and diagnostics, takes validated mode
+// commands and target trajectories from operators (hmpc-forearm-cli, any ROS 2 node), and
+// holds the arm when the commander running it falls silent.
 //
 // Paced in real time by a 1 kHz timer, or in HIL lock-step by the plant's Sync frames (one
 // host tick per simulated millisecond). A scripted session (--run) asks for idle with faults
@@ -142,11 +144,11 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   o.faults.silence_start_s = silence_at;
   o.faults.silence_duration_s = silence_at >= 0 ? silence_ms * 1e-3 : 0;
   // The board faults past its software limits (firmware BoardConfig): the target stays inside.
-  const auto& limits = hmpc::dds::command_limits();
-  if (o.scripted && (o.offset - o.amplitude < limits.theta_min_rad ||
-                     o.offset + o.amplitude > limits.theta_max_rad)) {
+  const auto& limits = hmpc::dds::forearm_joint_limits();
+  if (o.scripted && (o.offset - o.amplitude < limits.min_position ||
+                     o.offset + o.amplitude > limits.max_position)) {
     error = "the target offset +- amplitude must lie within the board's joint limits [" +
-            std::to_string(limits.theta_min_rad) + ", " + std::to_string(limits.theta_max_rad) +
+            std::to_string(limits.min_position) + ", " + std::to_string(limits.max_position) +
             "] rad";
     return hmpc::cli::ParseOutcome::kError;
   }
@@ -192,21 +194,16 @@ class Host {
  public:
   Host(const Options& o, SocketCan& can, hmpc::dds::ForearmDdsBridge* dds, std::FILE* log)
       : o_(o), can_(can), dds_(dds), log_(log), master_({o.node}), sender_(o.node),
-        sync_receiver_(o.node), faults_(o.faults) {}
+        sync_receiver_(o.node), faults_(o.faults) {
+    trajectory_.reserve(hmpc::dds::kMaxTrajectoryPoints + 1);
+  }
 
   // One host tick at host time t: the script or DDS commands, then the frames due.
   bool tick(double t, std::string& error) {
     now_s_ = t;
     if (o_.die_at_s >= 0 && t >= o_.die_at_s) ::raise(SIGKILL);
     if (o_.scripted) script(t);
-    if (dds_) {
-      dds_->poll_commands([&](const hmpc::dds::ForearmCommandSample& c) { on_command(c, t); });
-      if (run_end_s_ > 0 && t >= run_end_s_) {
-        master_.request(proto::RequestedMode::kHold, master_.requested_strategy());
-        master_.stop_streaming();
-        run_end_s_ = -1;
-      }
-    }
+    if (dds_) dds_->poll(dds_handlers_);
     const bool heartbeat = !(o_.stop_heartbeat_at_s >= 0 && t >= o_.stop_heartbeat_at_s);
     bool ok = true;
     master_.tick(t, heartbeat, [&](const auto& message) {
@@ -269,7 +266,8 @@ class Host {
         "board_watchdog_trips=%u board_solver_failures=%u board_overruns=%u "
         "telemetry_frames=%llu solves=%llu solve_time_max_us=%.0f solve_time_median_us=%.0f "
         "host_rejected_frames=%u frames_dropped=%llu frames_corrupted=%llu frames_silenced=%llu "
-        "dds_commands=%llu dds_rejected_commands=%llu heartbeat_max_gap_ms=%.0f "
+        "dds_commands=%llu dds_trajectories=%llu dds_rejected=%llu dds_rejects=%s "
+        "dds_commander_silences=%llu heartbeat_max_gap_ms=%.0f "
         "last_heartbeat_s=%.3f interface_down=%llu\n",
         kProgram, now_s_, wall_s, run_start_s_, run_stop_s_,
         static_cast<unsigned long long>(frames_sent_),
@@ -286,7 +284,10 @@ class Host {
         solve_times_.median(), master_.rejects().total(),
         static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
         static_cast<unsigned long long>(f.silenced), static_cast<unsigned long long>(dds_commands_),
-        static_cast<unsigned long long>(dds_ ? dds_->rejected_commands() : 0),
+        static_cast<unsigned long long>(dds_trajectories_),
+        static_cast<unsigned long long>(dds_ ? dds_->rejects().total() : 0),
+        dds_ ? dds_->rejects().summary().c_str() : "none",
+        static_cast<unsigned long long>(dds_ ? dds_->commander_silences() : 0),
         heartbeat_max_gap_s_ * 1e3, last_heartbeat_s_,
         static_cast<unsigned long long>(interface_down_));
   }
@@ -310,25 +311,63 @@ class Host {
     }
   }
 
-  void on_command(const hmpc::dds::ForearmCommandSample& c, double t) {
+  // Repeated commands (a commander's heartbeat) are logged when they change something.
+  void on_command(const hmpc::dds::ModeCommandSample& c) {
     ++dds_commands_;
-    std::fprintf(stderr, "%s: DDS command %u at %.3f s: %s %s\n", kProgram,
-                 unsigned(c.sequence_number), t,
-                 proto::value_name(proto::kRequestedModeValues, std::uint32_t(c.mode)),
-                 proto::value_name(proto::kStrategyValues, std::uint32_t(c.strategy)));
-    master_.request(c.mode, c.strategy, c.clear_faults);
-    if (c.mode == proto::RequestedMode::kRun && c.target.kind == hmpc::dds::TargetKind::kSinusoid) {
-      master_.stream_sinusoid(c.target.amplitude_rad, c.target.frequency_hz, c.target.offset_rad,
-                              t);
-      run_start_s_ = t;
-      run_end_s_ = c.target.duration_s > 0 ? t + c.target.duration_s : -1;
-    } else if (c.mode != proto::RequestedMode::kRun) {
-      master_.stop_streaming();
-      run_end_s_ = -1;
-    } else {
-      // Run holding the current angle: the board holds where it is when it has no samples.
-      master_.stop_streaming();
+    if (c.mode != master_.requested_mode() || c.strategy != master_.requested_strategy() ||
+        c.clear_faults) {
+      std::fprintf(stderr, "%s: DDS command %u at %.3f s: %s %s%s\n", kProgram,
+                   unsigned(c.sequence_number), now_s_,
+                   proto::value_name(proto::kRequestedModeValues, std::uint32_t(c.mode)),
+                   proto::value_name(proto::kStrategyValues, std::uint32_t(c.strategy)),
+                   c.clear_faults ? ", clearing faults" : "");
     }
+    if (c.mode == proto::RequestedMode::kRun && master_.requested_mode() != c.mode) {
+      run_start_s_ = now_s_;
+    }
+    master_.request(c.mode, c.strategy, c.clear_faults);
+    // Idle and hold drop the target; run without one holds the present angle (the board holds
+    // where it is when it has no samples).
+    if (c.mode != proto::RequestedMode::kRun) master_.stop_streaming();
+  }
+
+  // A target that starts later than now begins at the joint's present angle: that first
+  // segment must respect the speed limit too.
+  hmpc::dds::Verdict on_trajectory(const hmpc::dds::TrajectoryView& view) {
+    const auto& limits = hmpc::dds::forearm_joint_limits();
+    trajectory_.clear();
+    if (view.points[0].time_s > 0) {
+      trajectory_.push_back({0, double(master_.report().joint.theta), 0, false});
+      const double speed =
+          std::abs(view.points[0].position - trajectory_[0].position) / view.points[0].time_s;
+      if (speed > limits.max_speed) {
+        char detail[160];
+        std::snprintf(detail, sizeof detail,
+                      "reaching points[0] from the present angle %.3f rad takes %.2f rad/s, "
+                      "beyond the joint's %.2f rad/s",
+                      trajectory_[0].position, speed, limits.max_speed);
+        return hmpc::dds::Verdict::reject(hmpc::dds::Rejection::kRateLimit, detail);
+      }
+    }
+    trajectory_.insert(trajectory_.end(), view.points, view.points + view.count);
+    const double t0 = now_s_ + view.start_delay_s;
+    if (!master_.stream_trajectory(trajectory_.data(), trajectory_.size(), t0, now_s_)) {
+      return hmpc::dds::Verdict::reject(hmpc::dds::Rejection::kTooLarge,
+                                        "more points than the host holds");
+    }
+    ++dds_trajectories_;
+    std::fprintf(stderr, "%s: DDS trajectory of %zu points over %.3f s at %.3f s\n", kProgram,
+                 view.count, view.points[view.count - 1].time_s, now_s_);
+    return hmpc::dds::Verdict::accept();
+  }
+
+  // The commander of a run went silent: hold where the arm is.
+  void on_commander_silent() {
+    if (master_.requested_mode() != proto::RequestedMode::kRun) return;
+    std::fprintf(stderr, "%s: commander silent at %.3f s: holding\n", kProgram, now_s_);
+    master_.stop_streaming();
+    master_.request(proto::RequestedMode::kHold, master_.requested_strategy());
+    run_stop_s_ = now_s_;
   }
 
   // The last heartbeat that reached the bus intact, and the longest interval between such
@@ -361,31 +400,28 @@ class Host {
     }
     if (dds_) {
       hmpc::dds::ForearmStateSample s;
-      s.board_time_s = now_s_;
-      s.mode = r.status.mode;
-      s.faults = r.status.faults;
-      s.strategy = r.status.strategy;
       s.theta = r.joint.theta;
       s.theta_dot = r.joint.theta_dot;
-      s.pressure_mpa = r.joint.pressure;
-      s.theta_d = std::isfinite(theta_d) ? theta_d : r.joint.theta;
-      s.v_p = r.outputs.v_p;
-      s.v_m = r.outputs.v_m;
-      s.tau_p = r.outputs.tau_p;
-      s.tau_m = r.outputs.tau_m;
+      hmpc::dds::ForearmTelemetrySample& m = s.telemetry;
+      m.mode = r.status.mode;
+      m.faults = r.status.faults;
+      m.strategy = r.status.strategy;
+      m.solve_status = r.telemetry.status;
+      m.coarse_iterations = r.telemetry.coarse_iterations;
+      m.fine_iterations = r.telemetry.fine_iterations;
+      m.solve_time_us = r.telemetry.solve_time_us;
+      m.theta_d = std::isfinite(theta_d) ? theta_d : r.joint.theta;
+      m.tracking_error = r.telemetry.tracking_error;
+      m.pressure_pa = r.joint.pressure * 1e6;  // the protocol's MPa
+      m.v_p = r.outputs.v_p;
+      m.v_m = r.outputs.v_m;
+      m.tau_p = r.outputs.tau_p;
+      m.tau_m = r.outputs.tau_m;
       s.rejected_frames = r.status.rejected_frames;
       s.watchdog_trips = r.status.watchdog_trips;
       s.solver_failures = r.status.solver_failures;
       s.overruns = r.status.overruns;
       dds_->publish(s);
-      hmpc::dds::ForearmTelemetrySample m;
-      m.time_s = now_s_;
-      m.solve_status = r.telemetry.status;
-      m.coarse_iterations = r.telemetry.coarse_iterations;
-      m.fine_iterations = r.telemetry.fine_iterations;
-      m.solve_time_us = r.telemetry.solve_time_us;
-      m.tracking_error = r.telemetry.tracking_error;
-      dds_->publish(m);
     }
   }
 
@@ -398,11 +434,16 @@ class Host {
   proto::Receiver sync_receiver_;
   hmpc::platform::FaultInjector faults_;
   double now_s_ = 0;
-  double run_start_s_ = -1, run_stop_s_ = -1, run_end_s_ = -1;
+  double run_start_s_ = -1, run_stop_s_ = -1;
   double last_active_heartbeat_s_ = -1, heartbeat_max_gap_s_ = 0, last_heartbeat_s_ = -1;
   std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
   std::uint64_t interface_down_ = 0;  // sends and receives that found the interface down
-  std::uint64_t dds_commands_ = 0;
+  std::uint64_t dds_commands_ = 0, dds_trajectories_ = 0;
+  std::vector<hmpc::host::TrajectoryPoint> trajectory_;  // reserved: no allocation per target
+  const hmpc::dds::ForearmDdsHandlers dds_handlers_{
+      [this](const hmpc::dds::ModeCommandSample& c) { on_command(c); },
+      [this](const hmpc::dds::TrajectoryView& v) { return on_trajectory(v); },
+      [this] { on_commander_silent(); }};
   SolveTimeHistogram solve_times_;
 };
 

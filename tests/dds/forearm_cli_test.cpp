@@ -1,10 +1,11 @@
 // hmpc-forearm-cli as a separate process against a bridge in this one: DDS discovery and
-// delivery between processes over loopback (no multicast), the CLI's checks and exit status.
-// Each case has its own domain id.
+// delivery between processes over loopback (no multicast), the CLI's targets, its repeated
+// command while it runs, its checks and exit status. Each case has its own domain id.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <future>
 #include <string>
@@ -12,11 +13,13 @@
 #include <vector>
 
 #include "hmpc/dds/forearm_dds.hpp"
+#include "hmpc/platform/linux/child_process.hpp"
 
 namespace {
 
 namespace dds = hmpc::dds;
 namespace proto = hmpc::forearm_protocol;
+using hmpc::host::TrajectoryPoint;
 
 constexpr double kPatience_s = 30;
 constexpr double kPi = 3.14159265358979323846;
@@ -41,130 +44,165 @@ Outcome run_cli(const std::string& arguments) {
   return outcome;
 }
 
-// Polls the bridge until `count` commands were accepted or rejected, or the CLI ended and a
-// last poll found nothing more.
-std::vector<dds::ForearmCommandSample> poll_while(dds::ForearmDdsBridge& bridge,
-                                                  std::future<Outcome>& cli, std::size_t count) {
-  std::vector<dds::ForearmCommandSample> accepted;
+// What the bridge handed on while a CLI ran.
+struct Received {
+  std::vector<dds::ModeCommandSample> commands;
+  std::vector<std::vector<TrajectoryPoint>> trajectories;
+  int silences_while_running = 0;
+  dds::ForearmDdsHandlers handlers() {
+    return {[this](const dds::ModeCommandSample& c) { commands.push_back(c); },
+            [this](const dds::TrajectoryView& v) {
+              trajectories.emplace_back(v.points, v.points + v.count);
+              return dds::Verdict::accept();
+            },
+            [this] {
+              if (!commands.empty() && commands.back().mode == proto::RequestedMode::kRun)
+                ++silences_while_running;
+            }};
+  }
+};
+
+// Polls the bridge every millisecond, as the host loop does, until the CLI ended, then once more.
+Received poll_until_done(dds::ForearmDdsBridge& bridge, std::future<Outcome>& cli) {
+  Received got;
+  const auto handlers = got.handlers();
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(2 * kPatience_s);
-  for (;;) {
-    const bool cli_done = cli.wait_for(std::chrono::milliseconds(10)) == std::future_status::ready;
-    bridge.poll_commands([&](const dds::ForearmCommandSample& c) { accepted.push_back(c); });
-    if (accepted.size() + bridge.rejected_commands() >= count) break;
-    if (cli_done || std::chrono::steady_clock::now() > deadline) break;
+  while (cli.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready &&
+         std::chrono::steady_clock::now() < deadline) {
+    bridge.poll(handlers);
   }
-  return accepted;
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  bridge.poll(handlers);
+  return got;
 }
 
-TEST(ForearmCli, RunCommandReachesTheBridge) {
-  dds::ForearmDdsBridge bridge(95, 1, dds::loopback_config());
+TEST(ForearmCli, RunSendsItsSinusoidRepeatsTheCommandWhileItLastsThenHolds) {
+  dds::ForearmDdsBridge bridge(98, 1, dds::loopback_config());
   auto cli = std::async(std::launch::async, [] {
     return run_cli(
-        "--domain 95 --node 1 --timeout 30 run --strategy coarse_20ms --sine 20 0.5 "
-        "--offset 10 --duration 12 --sequence 42");
+        "--domain 98 --node 1 run --strategy coarse_20ms --sine 20 0.5 --offset 10 "
+        "--duration 1 --sequence 42");
   });
-  const std::vector<dds::ForearmCommandSample> accepted = poll_while(bridge, cli, 1);
+  const Received got = poll_until_done(bridge, cli);
   const Outcome outcome = cli.get();
   EXPECT_EQ(outcome.status, 0) << outcome.output;
-  EXPECT_NE(outcome.output.find("sent run command 42 to node 1"), std::string::npos)
+  EXPECT_NE(outcome.output.find("sent run command 42 to node 1 with a target of 51 points"),
+            std::string::npos)
       << outcome.output;
-  ASSERT_EQ(accepted.size(), 1u) << outcome.output;
-  const dds::ForearmCommandSample& c = accepted[0];
-  EXPECT_EQ(c.node, 1);
-  EXPECT_EQ(c.sequence_number, 42u);
-  EXPECT_EQ(c.mode, proto::RequestedMode::kRun);
-  EXPECT_EQ(c.strategy, proto::Strategy::kCoarse20ms);
-  EXPECT_FALSE(c.clear_faults);
-  EXPECT_EQ(c.target.kind, dds::TargetKind::kSinusoid);
-  EXPECT_NEAR(c.target.amplitude_rad, 20 * kPi / 180, 1e-12);
-  EXPECT_EQ(c.target.frequency_hz, 0.5);
-  EXPECT_NEAR(c.target.offset_rad, 10 * kPi / 180, 1e-12);
-  EXPECT_EQ(c.target.duration_s, 12);
-  EXPECT_EQ(bridge.rejected_commands(), 0u);
+  EXPECT_NE(outcome.output.find("sent hold"), std::string::npos) << outcome.output;
+
+  ASSERT_EQ(got.trajectories.size(), 1u);
+  const std::vector<TrajectoryPoint>& points = got.trajectories[0];
+  ASSERT_EQ(points.size(), 51u) << "1 s every 20 ms, both ends";
+  const double a = 20 * kPi / 180, w = 2 * kPi * 0.5, offset = 10 * kPi / 180;
+  for (const TrajectoryPoint& p : points) {
+    EXPECT_NEAR(p.position, offset + a * std::sin(w * p.time_s), 1e-12) << p.time_s;
+    EXPECT_NEAR(p.velocity, a * w * std::cos(w * p.time_s), 1e-12) << p.time_s;
+    EXPECT_TRUE(p.has_velocity);
+  }
+  EXPECT_DOUBLE_EQ(points.back().time_s, 1.0);
+
+  // Every kCommandDeadlineS / 5 for 1 s: about 10 runs; a loaded machine may send fewer, but a
+  // CLI that sent once and left would send 1.
+  ASSERT_GE(got.commands.size(), 4u);
+  for (std::size_t i = 0; i + 1 < got.commands.size(); ++i) {
+    EXPECT_EQ(got.commands[i].mode, proto::RequestedMode::kRun) << i;
+    EXPECT_EQ(got.commands[i].strategy, proto::Strategy::kCoarse20ms) << i;
+    EXPECT_EQ(got.commands[i].sequence_number, 42u) << i;
+  }
+  EXPECT_EQ(got.commands.back().mode, proto::RequestedMode::kHold);
+  EXPECT_EQ(got.silences_while_running, 0) << "the run's commander never fell silent";
+  EXPECT_EQ(bridge.rejects().total(), 0u) << bridge.rejects().summary();
 }
 
-TEST(ForearmCli, IdleWithClearFaultsHoldsNoTarget) {
-  dds::ForearmDdsBridge bridge(96, 0, dds::loopback_config());
-  auto cli = std::async(std::launch::async,
-                        [] { return run_cli("--domain 96 --timeout 30 idle --clear-faults"); });
-  const std::vector<dds::ForearmCommandSample> accepted = poll_while(bridge, cli, 1);
+TEST(ForearmCli, AnInterruptedRunEndsInHold) {
+  dds::ForearmDdsBridge bridge(100, 0, dds::loopback_config());
+  Received got;
+  const auto handlers = got.handlers();
+  hmpc::platform::Child cli;
+  std::string error;
+  const std::string out = std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") +
+                          "/hmpc-forearm-cli-interrupted.out";
+  ASSERT_TRUE(cli.start(HMPC_FOREARM_CLI,
+                        {"--dds-loopback", "--domain", "100", "run", "--offset", "5"}, out, error))
+      << error;
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(kPatience_s);
+  while (got.commands.size() < 3 && std::chrono::steady_clock::now() < deadline) {
+    bridge.poll(handlers);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_GE(got.commands.size(), 3u) << cli.output() << cli.errors();
+  EXPECT_EQ(cli.stop(kPatience_s), 0) << cli.output() << cli.errors();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  bridge.poll(handlers);
+  EXPECT_NE(cli.output().find("(interrupted): sent hold"), std::string::npos) << cli.output();
+  EXPECT_EQ(got.commands.back().mode, proto::RequestedMode::kHold);
+  ASSERT_EQ(got.trajectories.size(), 1u);
+  ASSERT_EQ(got.trajectories[0].size(), 1u) << "a constant target: one point";
+  EXPECT_NEAR(got.trajectories[0][0].position, 5 * kPi / 180, 1e-12);
+  EXPECT_EQ(got.trajectories[0][0].time_s, 1.0) << "reached in a second";
+}
+
+TEST(ForearmCli, IdleWithClearFaultsSendsOneCommandAndNoTarget) {
+  dds::ForearmDdsBridge bridge(101, 2, dds::loopback_config());
+  auto cli = std::async(std::launch::async, [] {
+    return run_cli("--domain 101 --node 2 idle --clear-faults --strategy pam_only");
+  });
+  const Received got = poll_until_done(bridge, cli);
   const Outcome outcome = cli.get();
   EXPECT_EQ(outcome.status, 0) << outcome.output;
-  ASSERT_EQ(accepted.size(), 1u) << outcome.output;
-  EXPECT_EQ(accepted[0].mode, proto::RequestedMode::kIdle);
-  EXPECT_TRUE(accepted[0].clear_faults);
-  EXPECT_EQ(accepted[0].target.kind, dds::TargetKind::kHoldCurrent);
+  ASSERT_EQ(got.commands.size(), 1u) << outcome.output;
+  EXPECT_EQ(got.commands[0].mode, proto::RequestedMode::kIdle);
+  EXPECT_EQ(got.commands[0].strategy, proto::Strategy::kPamOnly);
+  EXPECT_TRUE(got.commands[0].clear_faults);
+  EXPECT_TRUE(got.trajectories.empty());
 }
 
-// --raw-sample skips the CLI's own check: the bridge must refuse the sample itself.
-TEST(ForearmCli, RawMalformedSamplesAreRejectedByTheBridge) {
-  dds::ForearmDdsBridge bridge(97, 2, dds::loopback_config());
-  const char* const malformed[] = {
-      "--node 2 --raw-sample run --sine nan 1",
-      "--node 2 --raw-sample run --strategy 9",
-      "--node 16 --raw-sample hold",
-  };
-  std::size_t sent = 0;
-  for (const char* arguments : malformed) {
-    ++sent;
-    auto cli = std::async(std::launch::async, [arguments] {
-      return run_cli(std::string("--domain 97 --timeout 30 ") + arguments);
-    });
-    const std::vector<dds::ForearmCommandSample> accepted = poll_while(bridge, cli, sent);
-    const Outcome outcome = cli.get();
-    EXPECT_EQ(outcome.status, 0) << arguments << "\n" << outcome.output;
-    EXPECT_TRUE(accepted.empty()) << arguments;
-    EXPECT_EQ(bridge.rejected_commands(), sent) << arguments;
-  }
-}
-
-// Watches while the bridge publishes as the host loop does, every 4 ms, until the CLI exits.
-template <class Sample>
-Outcome watch_while_publishing(dds::ForearmDdsBridge& bridge, const Sample& sample) {
+TEST(ForearmCli, WatchPrintsJointStateTelemetryAndDiagnostics) {
+  dds::ForearmDdsBridge bridge(102, 4, dds::loopback_config());
+  dds::ForearmStateSample state;
+  state.theta = 0.4321;
+  state.telemetry.mode = proto::BoardMode::kHold;
+  state.telemetry.solve_status = proto::SolveStatusCode::kBudgetExhausted;
+  state.telemetry.solve_time_us = 2345;
   auto cli = std::async(std::launch::async, [] {
-    return run_cli("--domain 98 --node 4 --timeout 30 watch --samples 3");
+    return run_cli("--domain 102 --node 4 --timeout 30 watch --samples 400");
   });
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(2 * kPatience_s);
-  while (cli.wait_for(std::chrono::milliseconds(4)) != std::future_status::ready &&
-         std::chrono::steady_clock::now() < deadline) {
-    bridge.publish(sample);
+  // Published as the host loop does, every 4 ms, until the CLI exits; the mode changes every
+  // 25 samples, and with it the diagnostics, which go out at once.
+  for (int i = 0; cli.wait_for(std::chrono::milliseconds(4)) != std::future_status::ready &&
+                  std::chrono::steady_clock::now() < deadline;
+       ++i) {
+    state.telemetry.mode = (i / 25) % 2 ? proto::BoardMode::kRun : proto::BoardMode::kHold;
+    bridge.publish(state);
   }
-  return cli.get();
-}
-
-TEST(ForearmCli, WatchPrintsTheBridgesStateAndTelemetry) {
-  dds::ForearmDdsBridge bridge(98, 4, dds::loopback_config());
-  dds::ForearmStateSample state;
-  state.mode = proto::BoardMode::kHold;
-  state.theta = 0.4321;
-  const Outcome states = watch_while_publishing(bridge, state);
-  EXPECT_EQ(states.status, 0) << states.output;
-  EXPECT_NE(states.output.find("state     node 4 "), std::string::npos) << states.output;
-  EXPECT_NE(states.output.find("mode hold"), std::string::npos) << states.output;
-  EXPECT_NE(states.output.find("theta 0.4321 rad"), std::string::npos) << states.output;
-
-  dds::ForearmTelemetrySample telemetry;
-  telemetry.solve_status = proto::SolveStatusCode::kBudgetExhausted;
-  telemetry.solve_time_us = 2345;
-  const Outcome telemetries = watch_while_publishing(bridge, telemetry);
-  EXPECT_EQ(telemetries.status, 0) << telemetries.output;
-  EXPECT_NE(telemetries.output.find("telemetry node 4 "), std::string::npos) << telemetries.output;
-  EXPECT_NE(telemetries.output.find("status budget_exhausted"), std::string::npos)
-      << telemetries.output;
-  EXPECT_NE(telemetries.output.find("solve 2345 us"), std::string::npos) << telemetries.output;
-}
-
-TEST(ForearmCli, NoBridgeIsAnErrorNamingTheDomain) {
-  const Outcome outcome = run_cli("--domain 99 --timeout 1 hold");
-  EXPECT_EQ(outcome.status, 1) << outcome.output;
-  EXPECT_NE(outcome.output.find("no forearm bridge subscribed to commands on domain 99"),
+  const Outcome outcome = cli.get();
+  EXPECT_EQ(outcome.status, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find("joint     elbow position 0.4321 rad"), std::string::npos)
+      << outcome.output;
+  EXPECT_NE(outcome.output.find("telemetry mode hold"), std::string::npos) << outcome.output;
+  EXPECT_NE(outcome.output.find("status budget_exhausted"), std::string::npos) << outcome.output;
+  EXPECT_NE(outcome.output.find("solve 2345 us"), std::string::npos) << outcome.output;
+  EXPECT_NE(outcome.output.find("diagnostics hmpc/forearm_4/board OK 'run, two_stage' (forearm "
+                                "board node 4): mode=run faults=0x00 strategy=two_stage"),
             std::string::npos)
       << outcome.output;
 }
 
-TEST(ForearmCli, BadArgumentsExit2NamingTheProblem) {
+TEST(ForearmCli, NoBridgeIsAnErrorNamingTheTopicAndDomain) {
+  const Outcome outcome = run_cli("--domain 99 --timeout 1 hold");
+  EXPECT_EQ(outcome.status, 1) << outcome.output;
+  EXPECT_NE(outcome.output.find("no forearm bridge subscribed to /hmpc/forearm_0/command on "
+                                "domain 99"),
+            std::string::npos)
+      << outcome.output;
+}
+
+TEST(ForearmCli, BadArgumentsAndTargetsExit2NamingTheProblem) {
   struct Case {
     const char* arguments;
     const char* message;
@@ -176,15 +214,19 @@ TEST(ForearmCli, BadArgumentsExit2NamingTheProblem) {
       {"run --strategy", "--strategy needs a value"},
       {"run --strategy fine2", "--strategy must be one of"},
       {"run --sine 20", "--sine frequency needs a value"},
-      {"run --sine 20x 1", "--sine amplitude needs a number, got '20x'"},
-      {"--node 16 run", "invalid command: node 16 is outside 0..15"},
+      {"run --sine 20x 1 --duration 1", "--sine amplitude needs a finite number, got '20x'"},
+      {"run --sine nan 1 --duration 1", "--sine amplitude needs a finite number, got 'nan'"},
+      {"run --sine 20 1", "--sine needs a --duration"},
+      {"hold --offset 10", "--sine and --offset are targets of run"},
+      {"--node 16 run", "--node must be an integer in 0..15"},
       {"--domain 233 run", "--domain must be an integer in 0..232"},
       {"--timeout 0 run", "--timeout must be a number of seconds"},
-      {"run --sine 80 1", "invalid command: target.amplitude_rad"},
-      {"run --sine nan 1", "invalid command: target.amplitude_rad is not finite"},
-      {"run --sine 20 9", "invalid command: target.frequency_hz 9 is outside 0..5 Hz"},
-      {"hold --offset 60 --sine 40 0.5", "invalid command: target.offset_rad"},
-      {"run --duration -1", "invalid command: target.duration_s -1"},
+      {"run --sine 80 1 --duration 1", "(elbow) = -1.26338 is outside -1.2..1.6"},
+      {"run --sine 20 9 --duration 1",
+       "invalid target: points[0].velocities[0] (elbow) = 19.7392 rad/s is beyond the joint's 10"},
+      {"run --offset 100", "invalid target: points[0].positions[0] (elbow) = 1.74533 is outside"},
+      {"run --sine 1 0.1 --duration 200", "the host holds at most 8192"},
+      {"run --duration -1", "--duration must not be negative"},
       {"watch --samples 0", "--samples must be an integer in 1..1000000"},
       {"idle extra", "unexpected argument 'extra'"},
   };

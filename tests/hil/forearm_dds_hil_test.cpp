@@ -1,10 +1,14 @@
-// DDS to CAN, end to end: hmpc-forearm-cli sends commands over Cyclone DDS (loopback,
-// its own domain id) to hmpc-forearm-host, which drives hmpc-forearm-board over vcan0 with the
-// Simbody plant in lock-step. The board's mode, as the host publishes it back over DDS, must
-// follow the CLI's commands; a malformed command must be rejected and counted, never acted on.
+// DDS to CAN, end to end: hmpc-forearm-cli sends mode commands and a JointTrajectory over
+// Cyclone DDS (loopback, its own domain id) to hmpc-forearm-host, which drives
+// hmpc-forearm-board over vcan0 with the Simbody plant in lock-step. The board's mode and
+// target, as the host publishes them back over DDS, must follow the CLI; a malformed sample
+// must be rejected and counted, never acted on; a commander that hangs must leave the arm
+// holding.
 // ctest runs this binary through hil/vcan/run-with-vcan.sh.
 #include <gtest/gtest.h>
+#include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +17,7 @@
 #include <vector>
 
 #include "hil_run.hpp"
+#include "hmpc/dds/endpoint.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 #include "hmpc/platform/linux/child_process.hpp"
 
@@ -44,22 +49,50 @@ int run_cli(const std::vector<std::string>& args, std::string& output) {
   return status;
 }
 
-// Waits until the host publishes a state with this mode (and strategy, in run).
+// Waits until the host's telemetry shows this mode (and strategy, in run).
 bool await_mode(hmpc::dds::ForearmDdsClient& client, proto::BoardMode mode,
                 proto::Strategy strategy = proto::Strategy::kTwoStage) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
   bool seen = false;
   while (!seen && std::chrono::steady_clock::now() < end) {
     client.wait_for_data(1.0);
-    client.poll_state([&](const hmpc::dds::ForearmStateSample& s) {
-      seen = seen || (s.mode == mode && (mode != proto::BoardMode::kRun || s.strategy == strategy));
+    client.poll_telemetry([&](const hmpc::dds::ForearmTelemetrySample& t) {
+      seen = seen || (t.mode == mode && (mode != proto::BoardMode::kRun || t.strategy == strategy));
     });
-    client.poll_telemetry([](const hmpc::dds::ForearmTelemetrySample&) {});
+    client.poll_joint_states([](const hmpc::dds::JointStateSample&) {});
+    client.poll_diagnostics([](const hmpc::dds::DiagnosticSample&) {});
   }
   return seen;
 }
 
-TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected) {
+// Waits until the host's stderr says `text`.
+bool await_errors(const Child& program, const std::string& text) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+  while (program.errors().find(text) == std::string::npos) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+// A trajectory with a NaN position, as a broken ROS 2 node could send it.
+bool send_malformed_trajectory() {
+  namespace msg = hmpc::dds::msg;
+  const hmpc::dds::Participant participant(kDomain, hmpc::dds::loopback_config());
+  const hmpc::dds::Writer<msg::JointTrajectory> writer(
+      participant, hmpc::dds::default_namespace(0) + "/joint_trajectory", hmpc::dds::Qos::state());
+  const double nan = std::nan("");
+  msg::JointTrajectoryPoint point{};
+  point.positions = hmpc::dds::borrow(&nan, 1);
+  const char* names[] = {hmpc::dds::kJointName};
+  msg::JointTrajectory t{};
+  t.header.frame_id = hmpc::dds::borrow("");
+  t.joint_names = hmpc::dds::borrow(names, 1);
+  t.points = hmpc::dds::borrow<decltype(t.points)>(&point, 1);
+  return writer.wait_for_reader(kWaitS) && writer.write(t) && writer.wait_for_acks(kWaitS);
+}
+
+TEST(ForearmDdsOverCan, CliCommandsDriveTheBoardMalformedSamplesAreRejectedASilentCommanderHolds) {
   std::filesystem::create_directories(dir());
   const hmpc::hil::HilPrograms programs = hmpc::hil::HilPrograms::built();
   Child board, host, plant;
@@ -76,7 +109,7 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
                           dir() + "/plant.out", error))
       << error;
 
-  hmpc::dds::ForearmDdsClient client(kDomain, hmpc::dds::loopback_config());
+  hmpc::dds::ForearmDdsClient client(kDomain, 0, hmpc::dds::loopback_config());
   ASSERT_TRUE(client.wait_for_bridge(60));
   ASSERT_TRUE(await_mode(client, proto::BoardMode::kIdle)) << "the host publishes no idle state";
 
@@ -84,41 +117,69 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
   ASSERT_EQ(run_cli({"hold"}, output), 0) << output;
   EXPECT_TRUE(await_mode(client, proto::BoardMode::kHold)) << "the board never entered hold";
 
-  ASSERT_EQ(run_cli({"run", "--strategy", "coarse_20ms", "--sine", "20", "1"}, output), 0)
-      << output;
+  // A run of 160 s (8001 target points, near the host's 8192), longer than the test takes even
+  // emulated: the CLI keeps repeating its command until it is stopped below.
+  Child run;
+  ASSERT_TRUE(
+      run.start(HMPC_FOREARM_CLI_PROGRAM,
+                {"--domain", std::to_string(kDomain), "--dds-loopback", "--timeout", "60", "run",
+                 "--strategy", "coarse_20ms", "--sine", "20", "1", "--duration", "160"},
+                dir() + "/run.out", error))
+      << error;
   EXPECT_TRUE(await_mode(client, proto::BoardMode::kRun, proto::Strategy::kCoarse20ms))
-      << "the board never ran Coarse 20 ms";
+      << "the board never ran Coarse 20 ms: " << run.output() << run.errors();
+  ASSERT_TRUE(await_errors(host, "DDS trajectory of 8001 points")) << host.errors();
 
-  // NaN amplitude: the host's bridge rejects it; the board keeps running as it was, with the
-  // same strategy and the same 20 deg target, for the 0.2 s of host time watched after the
-  // host has said so (50 MPC periods, time enough for a command acted on to show).
-  ASSERT_EQ(
-      run_cli({"--raw-sample", "run", "--strategy", "two_stage", "--sine", "nan", "1"}, output), 0)
-      << output;
+  // The JointTrajectory reaches the board: over a period of host time (250 telemetry samples,
+  // one per 4 ms MPC period) its target swings through the +-20 deg sinusoid.
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
-  while (host.errors().find("amplitude") == std::string::npos &&
-         std::chrono::steady_clock::now() < give_up) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ASSERT_NE(host.errors().find("amplitude"), std::string::npos)
-      << "the host never rejected the command: " << host.errors();
-  double first_s = -1, last_s = -1;
-  int watched = 0, unchanged = 0;
-  while (!(last_s - first_s >= 0.2) && std::chrono::steady_clock::now() < give_up) {
-    client.wait_for_data(1.0);
-    client.poll_state([&](const hmpc::dds::ForearmStateSample& s) {
-      if (first_s < 0) first_s = s.board_time_s;
-      last_s = s.board_time_s;
-      ++watched;
-      unchanged += s.mode == proto::BoardMode::kRun && s.strategy == proto::Strategy::kCoarse20ms &&
-                   std::abs(s.theta_d) <= 20 * M_PI / 180 + 1e-6;
-    });
-    client.poll_telemetry([](const hmpc::dds::ForearmTelemetrySample&) {});
-  }
-  EXPECT_GE(last_s - first_s, 0.2) << "too few states after the rejected command";
-  EXPECT_GT(watched, 0);
-  EXPECT_EQ(unchanged, watched)
-      << "the rejected command changed the board's mode, strategy or target";
+  const auto watch = [&](int samples, auto&& on_sample) {
+    int seen = 0;
+    while (seen < samples && std::chrono::steady_clock::now() < give_up) {
+      client.wait_for_data(1.0);
+      client.poll_telemetry([&](const hmpc::dds::ForearmTelemetrySample& t) {
+        ++seen;
+        on_sample(t);
+      });
+      client.poll_joint_states([](const hmpc::dds::JointStateSample&) {});
+      client.poll_diagnostics([](const hmpc::dds::DiagnosticSample&) {});
+    }
+    return seen;
+  };
+  double low = 1, high = -1;
+  EXPECT_EQ(watch(250,
+                  [&](const hmpc::dds::ForearmTelemetrySample& t) {
+                    low = std::min(low, t.theta_d);
+                    high = std::max(high, t.theta_d);
+                  }),
+            250);
+  const double a = 20 * M_PI / 180;
+  EXPECT_LT(low, -0.9 * a) << "target range " << low << ".." << high;
+  EXPECT_GT(high, 0.9 * a) << "target range " << low << ".." << high;
+  EXPECT_GE(low, -a - 1e-6);
+  EXPECT_LE(high, a + 1e-6);
+
+  // A trajectory with a NaN: rejected by the host's bridge; the board keeps running as it
+  // was, with the same strategy and the same 20 deg target, for the 75 MPC periods (0.3 s of
+  // host time) watched after the host has said so.
+  ASSERT_TRUE(send_malformed_trajectory());
+  ASSERT_TRUE(await_errors(host, "not_finite")) << "the host never rejected it: " << host.errors();
+  int unchanged = 0;
+  const int watched = watch(75, [&](const hmpc::dds::ForearmTelemetrySample& t) {
+    unchanged += t.mode == proto::BoardMode::kRun && t.strategy == proto::Strategy::kCoarse20ms &&
+                 std::abs(t.theta_d) <= a + 1e-6;
+  });
+  EXPECT_EQ(watched, 75);
+  EXPECT_EQ(unchanged, watched) << "the rejected sample changed the board's mode, strategy or "
+                                   "target";
+
+  // The commander hangs: the host notices within the command deadline and holds.
+  run.signal(SIGSTOP);
+  ASSERT_TRUE(await_errors(host, "commander silent at")) << host.errors();
+  EXPECT_TRUE(await_mode(client, proto::BoardMode::kHold)) << "the board never held";
+  run.signal(SIGKILL);
+  run.signal(SIGCONT);
+
   // A valid command after it proves the bridge is still listening.
   ASSERT_EQ(run_cli({"idle"}, output), 0) << output;
   EXPECT_TRUE(await_mode(client, proto::BoardMode::kIdle)) << "the board never went idle";
@@ -127,10 +188,14 @@ TEST(ForearmDdsOverCan, CliCommandsChangeTheBoardModeAndMalformedOnesAreRejected
   EXPECT_EQ(host.stop(30), 0) << host.errors();
   EXPECT_EQ(board.stop(30), 0) << board.errors();
   const auto summary = hmpc::platform::parse_summary(host.output());
-  EXPECT_EQ(summary.at("dds_commands"), "3");  // hold, run, idle
-  EXPECT_EQ(summary.at("dds_rejected_commands"), "1");
-  EXPECT_NE(host.errors().find("amplitude"), std::string::npos)
-      << "the rejection names the field: " << host.errors();
+  EXPECT_GE(std::stoi(summary.at("dds_commands")), 4) << "hold, run repeated, idle";
+  EXPECT_EQ(summary.at("dds_trajectories"), "1");
+  EXPECT_EQ(summary.at("dds_rejected"), "1");
+  EXPECT_EQ(summary.at("dds_rejects"), "not_finite=1");
+  EXPECT_GE(std::stoi(summary.at("dds_commander_silences")), 1);
+  const std::string errors = host.errors();
+  EXPECT_EQ(errors.find("commander silent at"), errors.rfind("commander silent at"))
+      << "only the run's silence holds the arm: " << errors;
   const auto board_summary = hmpc::platform::parse_summary(board.output());
   EXPECT_EQ(board_summary.at("faults"), "0x00");
   EXPECT_EQ(board_summary.at("rejected_frames"), "0");

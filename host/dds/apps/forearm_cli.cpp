@@ -1,13 +1,21 @@
 // hmpc-forearm-cli: commands a forearm board through the host controller's DDS bridge, or
-// watches its state and telemetry. Exit status: 0 done, 1 no bridge or no data in time (or a
-// DDS failure), 2 bad arguments or an invalid command.
+// watches its joint state, telemetry and diagnostics (the topics of hmpc/dds/forearm_dds.hpp).
+// `run` sends its target as a JointTrajectory, then repeats the run command within the command
+// topic's deadline until --duration has passed or it is interrupted, and then asks for hold: a
+// run lasts only as long as its commander. Exit status: 0 done, 1 no bridge or no data in time
+// (or a DDS failure), 2 bad arguments or an invalid target.
+#include <signal.h>
+
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "hmpc/dds/endpoint.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 
 namespace {
@@ -16,6 +24,17 @@ namespace dds = hmpc::dds;
 namespace proto = hmpc::forearm_protocol;
 
 constexpr double kPi = 3.14159265358979323846;
+// A sinusoid goes out as points this far apart, with their velocities: the cubic Hermite
+// between them is within A (2 pi f h)^4 / 384 of the sinusoid, 2e-5 rad at 30 deg and 2.5 Hz.
+constexpr double kSineSpacingS = 0.020;
+// A constant target is reached over this time from wherever the joint is: across the whole
+// joint range (2.8 rad) at 2.8 rad/s, within kMaxTargetSpeed.
+constexpr double kRampS = 1.0;
+// The run command is repeated five times per deadline, so one lost or late sample never trips it.
+constexpr double kRepeatS = dds::kCommandDeadlineS / 5;
+
+volatile sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
 
 void usage(std::FILE* out) {
   std::fprintf(
@@ -24,24 +43,25 @@ void usage(std::FILE* out) {
       "       hmpc-forearm-cli [OPTIONS] watch [--samples K]\n"
       "options:\n"
       "  --domain N        DDS domain id, 0..232 (default 0)\n"
-      "  --node N          forearm board node, 0..15 (default 0)\n"
+      "  --node N          forearm board node, 0..15 (default 0): topics /hmpc/forearm_N/...\n"
       "  --dds-loopback    DDS on 127.0.0.1 only, no multicast (tests, the HIL guest)\n"
       "  --timeout S       seconds to wait for a bridge or for data (default 10)\n"
       "commands:\n"
-      "  run               run the MPC on the target\n"
-      "  hold              hold the target with the joint PID\n"
+      "  run               run the MPC on the target, for --duration or until interrupted,\n"
+      "                    then hold\n"
+      "  hold              hold the present angle with the joint PID\n"
       "  idle              safe outputs\n"
-      "  watch             print the node's state and telemetry as they arrive\n"
+      "  watch             print the node's joint state, telemetry and diagnostics\n"
       "command options (run, hold, idle):\n"
       "  --strategy NAME   fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, two_stage (default),\n"
       "                    pam_only\n"
-      "  --sine AMP_DEG FREQ_HZ  sinusoidal target of this amplitude and frequency\n"
-      "  --offset DEG      target offset (alone: a constant target); default: hold the\n"
-      "                    current angle\n"
-      "  --duration S      how long the target runs, 0 = until the next command (default 0)\n"
+      "  --sine AMP_DEG FREQ_HZ  sinusoidal target of this amplitude and frequency (run, needs\n"
+      "                    --duration)\n"
+      "  --offset DEG      target offset (alone: a constant target reached in 1 s); default:\n"
+      "                    hold the present angle\n"
+      "  --duration S      how long the run lasts, 0 = until interrupted (default 0)\n"
       "  --clear-faults    clear the board's latched faults\n"
       "  --sequence N      sequence number of the command (default: milliseconds of the clock)\n"
-      "  --raw-sample      send the command without checking it (tests the bridge's checks)\n"
       "watch options:\n"
       "  --samples K       stop after K samples, 1..1000000 (default 10)\n");
 }
@@ -62,7 +82,6 @@ struct Options {
   bool clear_faults = false;
   bool sequence_given = false;
   unsigned long sequence = 0;
-  bool raw_sample = false;
   long samples = 10;
 };
 
@@ -86,13 +105,11 @@ class Arguments {
   std::size_t next_ = 0;
 };
 
-// Numbers as strtod reads them, nan and inf included: validate() rejects those unless
-// --raw-sample asks to send them as they are.
 double number(const std::string& option, const std::string& text) {
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0') {
-    throw ArgumentError{option + " needs a number, got '" + text + "'"};
+  if (text.empty() || *end != '\0' || !std::isfinite(value)) {
+    throw ArgumentError{option + " needs a finite number, got '" + text + "'"};
   }
   return value;
 }
@@ -115,15 +132,11 @@ double positive_seconds(const std::string& option, const std::string& text) {
   return value;
 }
 
-// A name, or with --raw-sample any code 0..255 (to send an invalid one on purpose).
 proto::Strategy strategy_of(const Options& o) {
   // The protocol's names (its DBC value table), as every program uses them.
   std::uint32_t value = 0;
   if (proto::value_of(proto::kStrategyValues, o.strategy, value)) {
     return static_cast<proto::Strategy>(value);
-  }
-  if (o.raw_sample) {
-    return static_cast<proto::Strategy>(integer("--strategy", o.strategy, 0, 255));
   }
   throw ArgumentError{
       "--strategy must be one of fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, "
@@ -143,8 +156,7 @@ Options parse(int argc, char** argv) {
       // Cyclone maps domain ids to UDP ports 7400 + 250 d + ...: 232 is the last that fits.
       o.domain = static_cast<std::uint32_t>(integer(arg, args.value_of(arg), 0, 232));
     } else if (arg == "--node") {
-      // Up to 255 so --raw-sample can address a node the bridge must refuse.
-      o.node = static_cast<int>(integer(arg, args.value_of(arg), 0, 255));
+      o.node = static_cast<int>(integer(arg, args.value_of(arg), 0, proto::kMaxNodeId));
     } else if (arg == "--dds-loopback") {
       o.loopback = true;
     } else if (arg == "--timeout") {
@@ -160,13 +172,12 @@ Options parse(int argc, char** argv) {
       o.offset_deg = number(arg, args.value_of(arg));
     } else if (arg == "--duration") {
       o.duration_s = number(arg, args.value_of(arg));
+      if (o.duration_s < 0) throw ArgumentError{"--duration must not be negative"};
     } else if (arg == "--clear-faults") {
       o.clear_faults = true;
     } else if (arg == "--sequence") {
       o.sequence_given = true;
       o.sequence = static_cast<unsigned long>(integer(arg, args.value_of(arg), 0, 4294967295L));
-    } else if (arg == "--raw-sample") {
-      o.raw_sample = true;
     } else if (arg == "--samples") {
       o.samples = integer(arg, args.value_of(arg), 1, 1000000);
     } else if (arg.rfind("--", 0) == 0) {
@@ -181,12 +192,15 @@ Options parse(int argc, char** argv) {
     }
   }
   if (o.command.empty()) throw ArgumentError{"no command given (run, hold, idle or watch)"};
+  if ((o.sine || o.offset_given) && o.command != "run") {
+    throw ArgumentError{"--sine and --offset are targets of run"};
+  }
+  if (o.sine && !(o.duration_s > 0)) throw ArgumentError{"--sine needs a --duration"};
   return o;
 }
 
-dds::ForearmCommandSample command_of(const Options& o) {
-  dds::ForearmCommandSample c;
-  c.node = static_cast<proto::NodeId>(o.node);
+dds::ModeCommandSample command_of(const Options& o) {
+  dds::ModeCommandSample c;
   // Milliseconds of the wall clock, modulo 2^32: successive invocations count up.
   const auto now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
       std::chrono::system_clock::now().time_since_epoch());
@@ -196,79 +210,149 @@ dds::ForearmCommandSample command_of(const Options& o) {
                                  : proto::RequestedMode::kIdle;
   c.strategy = strategy_of(o);
   c.clear_faults = o.clear_faults;
-  if (o.sine || o.offset_given) {
-    c.target.kind = dds::TargetKind::kSinusoid;
-    c.target.amplitude_rad = o.amplitude_deg * kPi / 180;
-    c.target.frequency_hz = o.frequency_hz;
-    c.target.offset_rad = o.offset_deg * kPi / 180;
-  }
-  c.target.duration_s = o.duration_s;
   return c;
 }
 
-int send(const Options& o, const dds::ForearmCommandSample& command, const std::string& config) {
-  dds::ForearmDdsClient client(o.domain, config);
+// The target as points: a sinusoid sampled every kSineSpacingS with its velocities, or one
+// point reached after kRampS; none to hold the present angle.
+std::vector<hmpc::host::TrajectoryPoint> target_of(const Options& o) {
+  std::vector<hmpc::host::TrajectoryPoint> points;
+  const double offset = o.offset_deg * kPi / 180;
+  if (o.sine) {
+    const double amplitude = o.amplitude_deg * kPi / 180;
+    const double w = 2 * kPi * o.frequency_hz;
+    const auto count = static_cast<std::size_t>(std::ceil(o.duration_s / kSineSpacingS)) + 1;
+    if (count > dds::kMaxTrajectoryPoints) {
+      throw ArgumentError{"--duration " + std::to_string(o.duration_s) + " s of sinusoid is " +
+                          std::to_string(count) + " points, the host holds at most " +
+                          std::to_string(dds::kMaxTrajectoryPoints)};
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      const double t = double(k) * kSineSpacingS;
+      points.push_back(
+          {t, offset + amplitude * std::sin(w * t), amplitude * w * std::cos(w * t), true});
+    }
+  } else if (o.offset_given) {
+    points.push_back({kRampS, offset, 0, true});
+  }
+  return points;
+}
+
+// The bridge's own checks of the target, before it is sent: exit 2 with the reason.
+void check_target(const std::vector<hmpc::host::TrajectoryPoint>& points) {
+  if (points.empty()) return;
+  std::vector<hmpc::dds::msg::JointTrajectoryPoint> out(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    out[k].positions = dds::borrow(&points[k].position, 1);
+    out[k].velocities = dds::borrow(&points[k].velocity, points[k].has_velocity ? 1 : 0);
+    out[k].time_from_start = dds::from_seconds<dds::msg::Duration>(points[k].time_s);
+  }
+  const char* names[] = {dds::kJointName};
+  dds::msg::JointTrajectory t{};
+  t.joint_names = dds::borrow(names, 1);
+  t.points = dds::borrow<decltype(t.points)>(out.data(), out.size());
+  const dds::Verdict v = dds::validate(t, &dds::forearm_joint_limits(), 1,
+                                       dds::TrajectoryLimits{dds::kMaxTrajectoryPoints}, 0, {});
+  if (!v.ok) {
+    throw ArgumentError{"invalid target: " + v.detail + " (--sine and --offset take degrees)"};
+  }
+}
+
+bool deliver(dds::ForearmDdsClient& client, const Options& o) {
+  if (client.wait_for_delivery(o.timeout_s)) return true;
+  std::fprintf(stderr, "hmpc-forearm-cli: the bridge did not acknowledge within %g s\n",
+               o.timeout_s);
+  return false;
+}
+
+int send(const Options& o, const dds::ModeCommandSample& command,
+         const std::vector<hmpc::host::TrajectoryPoint>& target, const std::string& config) {
+  dds::ForearmDdsClient client(o.domain, static_cast<proto::NodeId>(o.node), config);
   if (!client.wait_for_bridge(o.timeout_s)) {
     std::fprintf(stderr,
-                 "hmpc-forearm-cli: no forearm bridge subscribed to commands on domain %u within "
-                 "%g s (is the host controller running%s?)\n",
-                 o.domain, o.timeout_s, o.loopback ? " with --dds-loopback" : "");
+                 "hmpc-forearm-cli: no forearm bridge subscribed to %s/command on domain %u "
+                 "within %g s (is the host controller running%s?)\n",
+                 dds::default_namespace(static_cast<proto::NodeId>(o.node)).c_str(), o.domain,
+                 o.timeout_s, o.loopback ? " with --dds-loopback" : "");
     return 1;
   }
-  if (!client.send(command) || !client.wait_for_delivery(o.timeout_s)) {
-    std::fprintf(stderr, "hmpc-forearm-cli: the command was not acknowledged within %g s\n",
-                 o.timeout_s);
-    return 1;
+  if (!target.empty() && !(client.send(target) && deliver(client, o))) return 1;
+  if (!client.send(command) || !deliver(client, o)) return 1;
+  std::printf("sent %s command %u to node %d%s\n", o.command.c_str(),
+              unsigned{command.sequence_number}, o.node,
+              target.empty()
+                  ? ""
+                  : (" with a target of " + std::to_string(target.size()) + " points").c_str());
+  std::fflush(stdout);
+  if (command.mode != proto::RequestedMode::kRun) return 0;
+  // In charge of the run: repeat the command until the end, then ask for hold.
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  while (!g_stop && (o.duration_s == 0 || elapsed() < o.duration_s)) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(kRepeatS));
+    if (!client.send(command)) {
+      std::fprintf(stderr, "hmpc-forearm-cli: DDS refused the repeated run command\n");
+      return 1;
+    }
   }
-  std::printf("sent %s command %u to node %d\n", o.command.c_str(),
-              unsigned{command.sequence_number}, o.node);
+  dds::ModeCommandSample hold = command;
+  hold.mode = proto::RequestedMode::kHold;
+  hold.clear_faults = false;
+  if (!client.send(hold) || !deliver(client, o)) return 1;
+  std::printf("run ended after %.1f s%s: sent hold\n", elapsed(), g_stop ? " (interrupted)" : "");
   return 0;
 }
 
-template <std::size_t N>
-const char* name_of(const proto::EnumValue (&values)[N], unsigned value) {
-  for (const proto::EnumValue& v : values) {
-    if (v.value == value) return v.name;
-  }
-  return "unknown";
-}
-
 int watch(const Options& o, const std::string& config) {
-  dds::ForearmDdsClient client(o.domain, config);
+  dds::ForearmDdsClient client(o.domain, static_cast<proto::NodeId>(o.node), config);
   long printed = 0;
-  const auto print_state = [&](const dds::ForearmStateSample& s) {
-    if (s.node != o.node || printed >= o.samples) return;
+  const auto room = [&] { return printed < o.samples; };
+  const auto print_joint = [&](const dds::JointStateSample& j) {
+    if (!room()) return;
     ++printed;
-    std::printf(
-        "state     node %u t %.3f s mode %s faults 0x%02x strategy %s theta %.4f rad "
-        "theta_dot %.4f rad/s P %.4f MPa theta_d %.4f rad v_p %.3f V v_m %.3f V "
-        "tau_p %.3f N.m tau_m %.3f N.m rejected %u watchdog %u solver failures %u "
-        "overruns %u\n",
-        unsigned{s.node}, s.board_time_s, name_of(proto::kBoardModeValues, unsigned(s.mode)),
-        unsigned{s.faults}, name_of(proto::kStrategyValues, unsigned(s.strategy)), s.theta,
-        s.theta_dot, s.pressure_mpa, s.theta_d, s.v_p, s.v_m, s.tau_p, s.tau_m,
-        unsigned{s.rejected_frames}, unsigned{s.watchdog_trips}, unsigned{s.solver_failures},
-        unsigned{s.overruns});
+    std::printf("joint     %s position %.4f rad velocity %.4f rad/s effort %.3f N.m\n",
+                dds::kJointName, j.position, j.velocity, j.effort);
   };
   const auto print_telemetry = [&](const dds::ForearmTelemetrySample& t) {
-    if (t.node != o.node || printed >= o.samples) return;
+    if (!room()) return;
     ++printed;
     std::printf(
-        "telemetry node %u t %.3f s status %s coarse iterations %u fine iterations %u "
-        "solve %u us tracking error %.4f rad\n",
-        unsigned{t.node}, t.time_s, name_of(proto::kSolveStatusValues, unsigned(t.solve_status)),
+        "telemetry mode %s faults 0x%02x strategy %s status %s coarse iterations %u fine "
+        "iterations %u solve %u us target %.4f rad error %.4f rad P %.0f Pa v_p %.3f V v_m "
+        "%.3f V tau_p %.3f N.m tau_m %.3f N.m\n",
+        proto::value_name(proto::kBoardModeValues, unsigned(t.mode)), unsigned{t.faults},
+        proto::value_name(proto::kStrategyValues, unsigned(t.strategy)),
+        proto::value_name(proto::kSolveStatusValues, unsigned(t.solve_status)),
         unsigned{t.coarse_iterations}, unsigned{t.fine_iterations}, unsigned{t.solve_time_us},
-        t.tracking_error);
+        t.theta_d, t.tracking_error, t.pressure_pa, t.v_p, t.v_m, t.tau_p, t.tau_m);
   };
-  while (printed < o.samples) {
+  const auto print_diagnostics = [&](const dds::DiagnosticSample& d) {
+    if (!room()) return;
+    ++printed;
+    std::string values;
+    for (const auto& [key, value] : d.values)
+      values.append(" ").append(key).append("=").append(value);
+    static const char* const kLevels[] = {"OK", "WARN", "ERROR", "STALE"};
+    std::printf("diagnostics %s %s '%s' (%s):%s\n", d.name.c_str(),
+                kLevels[static_cast<int>(d.level)], d.message.c_str(), d.hardware_id.c_str(),
+                values.c_str());
+  };
+  while (room()) {
     if (!client.wait_for_data(o.timeout_s)) {
       std::fprintf(stderr, "hmpc-forearm-cli: %ld of %ld samples from node %d within %g s\n",
                    printed, o.samples, o.node, o.timeout_s);
       return 1;
     }
-    client.poll_state(print_state);
+    client.poll_joint_states(print_joint);
     client.poll_telemetry(print_telemetry);
+    client.poll_diagnostics(print_diagnostics);
     std::fflush(stdout);
+  }
+  if (client.rejects().total() > 0) {
+    std::fprintf(stderr, "hmpc-forearm-cli: ignored malformed samples: %s\n",
+                 client.rejects().summary().c_str());
   }
   return 0;
 }
@@ -277,25 +361,28 @@ int watch(const Options& o, const std::string& config) {
 
 int main(int argc, char** argv) {
   Options options;
-  dds::ForearmCommandSample command;
+  dds::ModeCommandSample command;
+  std::vector<hmpc::host::TrajectoryPoint> target;
   try {
     options = parse(argc, argv);
     if (options.command != "watch") {
       command = command_of(options);
-      const dds::ValidationResult check = dds::validate(command);
-      if (!check.ok && !options.raw_sample) {
-        throw ArgumentError{"invalid command: " + check.reason +
-                            " (--sine and --offset take degrees)"};
-      }
+      target = target_of(options);
+      check_target(target);
     }
   } catch (const ArgumentError& e) {
     std::fprintf(stderr, "hmpc-forearm-cli: %s\n", e.message.c_str());
     usage(stderr);
     return 2;
   }
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
   const std::string config = options.loopback ? dds::loopback_config() : std::string();
   try {
-    return options.command == "watch" ? watch(options, config) : send(options, command, config);
+    return options.command == "watch" ? watch(options, config)
+                                      : send(options, command, target, config);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hmpc-forearm-cli: %s\n", e.what());
     return 1;

@@ -1,495 +1,416 @@
-// Cyclone DDS behind hmpc/dds/forearm_dds.hpp: C types generated from forearm.idl, converted
-// field by field to and from the plain structs users see.
+// The forearm's DDS topics on the generic layer: plain structs to and from the standard
+// messages, and the checks of what comes in.
 #include "hmpc/dds/forearm_dds.hpp"
 
-#include <dds/dds.h>
-
 #include <array>
+#include <cinttypes>
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <mutex>
 #include <stdexcept>
-#include <utility>
 
-#include "forearm.h"
+#include "hmpc/dds/endpoint.hpp"
 #include "hmpc/models/forearm.hpp"
 
 namespace hmpc::dds {
 
 namespace {
 
-// ------------------------------------------------------------------------ checking commands
+constexpr std::size_t kStrategyCount = std::size(proto::kStrategyValues);
 
-template <class... Numbers>
-std::string format(const char* pattern, Numbers... numbers) {
-  char text[256];
-  std::snprintf(text, sizeof text, pattern, double(numbers)...);
-  return text;
+// The strategies' names as ModeCommand carries them.
+const std::array<const char*, kStrategyCount>& strategy_names() {
+  static const std::array<const char*, kStrategyCount> names = [] {
+    std::array<const char*, kStrategyCount> n{};
+    for (std::size_t i = 0; i < kStrategyCount; ++i) n[i] = proto::kStrategyValues[i].name;
+    return n;
+  }();
+  return names;
 }
 
-ValidationResult reject(std::string reason) { return {false, std::move(reason)}; }
-
-// Empty when value is finite and in [min, max].
-std::string check_range(const char* field, double value, double min, double max, const char* unit) {
-  if (!std::isfinite(value)) return std::string(field) + format(" is not finite (%g)", value);
-  if (value < min || value > max) {
-    return std::string(field) + format(" %g is outside %g..%g ", value, min, max) + unit;
-  }
-  return {};
+const char* strategy_name(proto::Strategy s) {
+  return proto::value_name(proto::kStrategyValues, std::uint32_t(s));
 }
 
-// ------------------------------------------------------------------------ domains
-
-// Cyclone runs one domain instance per domain id and process. A domain created with a
-// configuration (dds_create_domain) lives until its handle is deleted, which also deletes
-// every participant in it: count the users, delete it with the last one.
-class DomainRegistry {
- public:
-  static DomainRegistry& instance() {
-    static DomainRegistry registry;
-    return registry;
-  }
-
-  void acquire(std::uint32_t domain_id, const std::string& config) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    auto found = domains_.find(domain_id);
-    if (found != domains_.end()) {
-      if (!config.empty() && config != found->second.config) {
-        throw std::runtime_error("DDS domain " + std::to_string(domain_id) +
-                                 " is already in use in this process with another configuration");
-      }
-      ++found->second.users;
-      return;
-    }
-    if (config.empty()) return;  // Cyclone's implicit domain, counted by Cyclone itself
-    const dds_entity_t handle = dds_create_domain(domain_id, config.c_str());
-    if (handle == DDS_RETCODE_PRECONDITION_NOT_MET) {
-      throw std::runtime_error("DDS domain " + std::to_string(domain_id) +
-                               " is already in use in this process without the configuration");
-    }
-    if (handle < 0) {
-      throw std::runtime_error("cannot create DDS domain " + std::to_string(domain_id) +
-                               " with the given configuration (" + dds_strretcode(handle) +
-                               "); Cyclone's message on stderr says why");
-    }
-    domains_.emplace(domain_id, Domain{handle, config, 1});
-  }
-
-  void release(std::uint32_t domain_id) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    auto found = domains_.find(domain_id);
-    if (found == domains_.end() || --found->second.users > 0) return;
-    dds_delete(found->second.handle);
-    domains_.erase(found);
-  }
-
- private:
-  struct Domain {
-    dds_entity_t handle;
-    std::string config;
-    int users;
-  };
-  std::mutex mutex_;
-  std::map<std::uint32_t, Domain> domains_;
+struct Topics {
+  explicit Topics(const std::string& ns)
+      : joint_states(ns + "/joint_states"), telemetry(ns + "/telemetry"), command(ns + "/command"),
+        joint_trajectory(ns + "/joint_trajectory") {}
+  std::string joint_states, telemetry, command, joint_trajectory;
+  std::string diagnostics = "/diagnostics";
 };
 
-std::string describe(const char* what, dds_return_t rc) {
-  return std::string("cannot create ") + what + ": " + dds_strretcode(rc);
+std::string namespace_or_default(const std::string& ros_namespace, proto::NodeId node) {
+  std::string ns = ros_namespace.empty() ? default_namespace(node) : ros_namespace;
+  dds_topic_name(ns);  // throws std::invalid_argument for a bad name
+  return ns;
 }
 
-dds_entity_t checked(dds_entity_t entity, const char* what) {
-  if (entity < 0) throw std::runtime_error(describe(what, entity));
-  return entity;
-}
+// The diagnostics' key/values: what changes them, and when they are due.
+struct DiagnosticsText {
+  std::array<std::string, 8> values;
 
-// One participant on a domain, with the QoS all our readers and writers use. Deleting the
-// participant deletes its topics, readers, writers and waitsets.
-class Participant {
- public:
-  Participant(std::uint32_t domain_id, const std::string& config) : domain_id_(domain_id) {
-    DomainRegistry::instance().acquire(domain_id, config);
-    handle_ = dds_create_participant(domain_id, nullptr, nullptr);
-    if (handle_ < 0) {
-      DomainRegistry::instance().release(domain_id);
-      throw std::runtime_error(
-          describe(("a DDS participant on domain " + std::to_string(domain_id)).c_str(), handle_));
-    }
-    qos_ = dds_create_qos();
-    // Reliable with a short keep-last history: a write never blocks the control loop, and a
-    // late reader gets the latest samples of each node.
-    dds_qset_reliability(qos_, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-    dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, kHistoryDepth);
+  static DiagnosticsText of(const ForearmStateSample& s) {
+    DiagnosticsText d;
+    char faults[8];
+    std::snprintf(faults, sizeof faults, "0x%02x", unsigned{s.telemetry.faults});
+    d.values = {
+        proto::value_name(proto::kBoardModeValues, std::uint32_t(s.telemetry.mode)),
+        faults,
+        strategy_name(s.telemetry.strategy),
+        std::to_string(s.rejected_frames),
+        std::to_string(s.watchdog_trips),
+        std::to_string(s.solver_failures),
+        std::to_string(s.overruns),
+        proto::value_name(proto::kSolveStatusValues, std::uint32_t(s.telemetry.solve_status))};
+    return d;
   }
-  ~Participant() {
-    dds_delete_qos(qos_);
-    dds_delete(handle_);
-    DomainRegistry::instance().release(domain_id_);
-  }
-  Participant(const Participant&) = delete;
-  Participant& operator=(const Participant&) = delete;
-
-  dds_entity_t topic(const dds_topic_descriptor_t& descriptor, const char* name) const {
-    return checked(dds_create_topic(handle_, &descriptor, name, qos_, nullptr),
-                   (std::string("DDS topic ") + name).c_str());
-  }
-  dds_entity_t writer(dds_entity_t topic, const char* name) const {
-    return checked(dds_create_writer(handle_, topic, qos_, nullptr),
-                   (std::string("DDS writer of ") + name).c_str());
-  }
-  dds_entity_t reader(dds_entity_t topic, const char* name) const {
-    return checked(dds_create_reader(handle_, topic, qos_, nullptr),
-                   (std::string("DDS reader of ") + name).c_str());
-  }
-  dds_entity_t handle() const { return handle_; }
-
- private:
-  std::uint32_t domain_id_;
-  dds_entity_t handle_;
-  dds_qos_t* qos_ = nullptr;
+  bool operator==(const DiagnosticsText& o) const { return values == o.values; }
 };
-
-// Takes every pending sample of reader in batches, calling visit on those with data (the
-// others announce a writer's disposal or departure).
-template <class CSample, class Visit>
-void take_all(dds_entity_t reader, Visit&& visit) {
-  constexpr std::size_t kBatch = 16;
-  std::array<CSample, kBatch> samples{};
-  std::array<void*, kBatch> pointers{};
-  for (std::size_t i = 0; i < kBatch; ++i) pointers[i] = &samples[i];
-  std::array<dds_sample_info_t, kBatch> infos{};
-  for (;;) {
-    const dds_return_t n = dds_take(reader, pointers.data(), infos.data(), kBatch, kBatch);
-    if (n <= 0) return;
-    for (dds_return_t i = 0; i < n; ++i) {
-      if (infos[i].valid_data) visit(samples[i]);
-    }
-    if (static_cast<std::size_t>(n) < kBatch) return;
-  }
-}
-
-dds_duration_t to_duration(double timeout_s) {
-  // A week is "forever" here, and stays far inside dds_duration_t.
-  constexpr double kLongest = 7 * 86400.0;
-  if (!(timeout_s > 0)) return 0;
-  return static_cast<dds_duration_t>(1e9 * (timeout_s < kLongest ? timeout_s : kLongest));
-}
-
-// ------------------------------------------------------------------------ conversions
-
-hmpc_dds_ForearmState to_c(const ForearmStateSample& s) {
-  hmpc_dds_ForearmState c{};
-  c.node = s.node;
-  c.board_time_s = s.board_time_s;
-  c.mode = static_cast<std::uint8_t>(s.mode);
-  c.faults = s.faults;
-  c.strategy = static_cast<std::uint8_t>(s.strategy);
-  c.theta = s.theta;
-  c.theta_dot = s.theta_dot;
-  c.pressure_mpa = s.pressure_mpa;
-  c.theta_d = s.theta_d;
-  c.v_p = s.v_p;
-  c.v_m = s.v_m;
-  c.tau_p = s.tau_p;
-  c.tau_m = s.tau_m;
-  c.rejected_frames = s.rejected_frames;
-  c.watchdog_trips = s.watchdog_trips;
-  c.solver_failures = s.solver_failures;
-  c.overruns = s.overruns;
-  return c;
-}
-
-ForearmStateSample from_c(const hmpc_dds_ForearmState& c) {
-  ForearmStateSample s;
-  s.node = c.node;
-  s.board_time_s = c.board_time_s;
-  s.mode = static_cast<proto::BoardMode>(c.mode);
-  s.faults = c.faults;
-  s.strategy = static_cast<proto::Strategy>(c.strategy);
-  s.theta = c.theta;
-  s.theta_dot = c.theta_dot;
-  s.pressure_mpa = c.pressure_mpa;
-  s.theta_d = c.theta_d;
-  s.v_p = c.v_p;
-  s.v_m = c.v_m;
-  s.tau_p = c.tau_p;
-  s.tau_m = c.tau_m;
-  s.rejected_frames = c.rejected_frames;
-  s.watchdog_trips = c.watchdog_trips;
-  s.solver_failures = c.solver_failures;
-  s.overruns = c.overruns;
-  return s;
-}
-
-hmpc_dds_ForearmTelemetry to_c(const ForearmTelemetrySample& s) {
-  hmpc_dds_ForearmTelemetry c{};
-  c.node = s.node;
-  c.time_s = s.time_s;
-  c.solve_status = static_cast<std::uint8_t>(s.solve_status);
-  c.coarse_iterations = s.coarse_iterations;
-  c.fine_iterations = s.fine_iterations;
-  c.solve_time_us = s.solve_time_us;
-  c.tracking_error = s.tracking_error;
-  return c;
-}
-
-ForearmTelemetrySample from_c(const hmpc_dds_ForearmTelemetry& c) {
-  ForearmTelemetrySample s;
-  s.node = c.node;
-  s.time_s = c.time_s;
-  s.solve_status = static_cast<proto::SolveStatusCode>(c.solve_status);
-  s.coarse_iterations = c.coarse_iterations;
-  s.fine_iterations = c.fine_iterations;
-  s.solve_time_us = c.solve_time_us;
-  s.tracking_error = c.tracking_error;
-  return s;
-}
-
-hmpc_dds_ForearmCommand to_c(const ForearmCommandSample& s) {
-  hmpc_dds_ForearmCommand c{};
-  c.node = s.node;
-  c.sequence_number = s.sequence_number;
-  c.mode = static_cast<std::uint8_t>(s.mode);
-  c.strategy = static_cast<std::uint8_t>(s.strategy);
-  c.clear_faults = s.clear_faults;
-  c.target.kind = static_cast<std::uint8_t>(s.target.kind);
-  c.target.amplitude_rad = s.target.amplitude_rad;
-  c.target.frequency_hz = s.target.frequency_hz;
-  c.target.offset_rad = s.target.offset_rad;
-  c.target.duration_s = s.target.duration_s;
-  return c;
-}
-
-ForearmCommandSample from_c(const hmpc_dds_ForearmCommand& c) {
-  ForearmCommandSample s;
-  s.node = c.node;
-  s.sequence_number = c.sequence_number;
-  s.mode = static_cast<proto::RequestedMode>(c.mode);
-  s.strategy = static_cast<proto::Strategy>(c.strategy);
-  s.clear_faults = c.clear_faults;
-  s.target.kind = static_cast<TargetKind>(c.target.kind);
-  s.target.amplitude_rad = c.target.amplitude_rad;
-  s.target.frequency_hz = c.target.frequency_hz;
-  s.target.offset_rad = c.target.offset_rad;
-  s.target.duration_s = c.target.duration_s;
-  return s;
-}
+constexpr std::array<const char*, 8> kDiagnosticKeys = {
+    "mode",           "faults",          "strategy", "rejected_frames",
+    "watchdog_trips", "solver_failures", "overruns", "solve_status"};
 
 }  // namespace
 
-// ------------------------------------------------------------------------ validation
+std::string default_namespace(proto::NodeId node) {
+  return "/hmpc/forearm_" + std::to_string(unsigned{node});
+}
 
-const CommandLimits& command_limits() {
-  static const CommandLimits limits = [] {
+const JointLimits& forearm_joint_limits() {
+  static const JointLimits limits = [] {
     const forearm::Parameters<double> arm{};
-    CommandLimits l;
-    l.theta_min_rad = arm.soft_limit_lower;
-    l.theta_max_rad = arm.soft_limit_upper;
-    return l;
+    return JointLimits{kJointName, arm.soft_limit_lower, arm.soft_limit_upper, kMaxTargetSpeed};
   }();
   return limits;
-}
-
-ValidationResult validate(const ForearmCommandSample& command) {
-  const CommandLimits& limits = command_limits();
-  if (command.node > proto::kMaxNodeId) {
-    return reject(format("node %g is outside 0..%g", command.node, proto::kMaxNodeId));
-  }
-  const auto mode = static_cast<unsigned>(command.mode);
-  if (mode < static_cast<unsigned>(proto::RequestedMode::kIdle) ||
-      mode > static_cast<unsigned>(proto::RequestedMode::kRun)) {
-    return reject(format("mode %g is not idle (1), hold (2) or run (3)", mode));
-  }
-  const auto strategy = static_cast<unsigned>(command.strategy);
-  if (strategy > static_cast<unsigned>(proto::Strategy::kPamOnly)) {
-    return reject(
-        format("strategy %g is not one of 0..5 (fine 4 ms, fine 8 ms, coarse 20 ms, "
-               "coarse 40 ms, two-stage, PAM-only)",
-               strategy));
-  }
-  const CommandTarget& target = command.target;
-  const auto kind = static_cast<unsigned>(target.kind);
-  if (kind > static_cast<unsigned>(TargetKind::kSinusoid)) {
-    return reject(format("target.kind %g is not hold-current (0) or sinusoid (1)", kind));
-  }
-  const std::string problem[] = {
-      check_range("target.amplitude_rad", target.amplitude_rad, 0, limits.max_amplitude_rad, "rad"),
-      check_range("target.frequency_hz", target.frequency_hz, 0, limits.max_frequency_hz, "Hz"),
-      check_range("target.offset_rad", target.offset_rad, -limits.max_abs_offset_rad,
-                  limits.max_abs_offset_rad, "rad"),
-      check_range("target.duration_s", target.duration_s, 0, limits.max_duration_s, "s"),
-  };
-  for (const std::string& p : problem) {
-    if (!p.empty()) return reject(p);
-  }
-  const double low = target.offset_rad - target.amplitude_rad;
-  const double high = target.offset_rad + target.amplitude_rad;
-  if (low < limits.theta_min_rad || high > limits.theta_max_rad) {
-    return reject(
-        format("target.offset_rad +- target.amplitude_rad spans %g..%g rad, beyond the "
-               "board's software joint limits %g..%g rad",
-               low, high, limits.theta_min_rad, limits.theta_max_rad));
-  }
-  return {};
-}
-
-std::string loopback_config() {
-  // ParticipantIndex auto gives each process a unicast discovery port of its own; Peers
-  // 127.0.0.1 makes discovery probe the ports of indices 0..MaxAutoParticipantIndex there,
-  // which is what replaces multicast discovery. 20 processes per domain is plenty for a
-  // host controller, a few operators and tests.
-  return "<CycloneDDS><Domain id=\"any\">"
-         "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
-         "<AllowMulticast>false</AllowMulticast></General>"
-         "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
-         "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex>"
-         "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
-         "</Domain></CycloneDDS>";
 }
 
 // ------------------------------------------------------------------------ bridge
 
 struct ForearmDdsBridge::Impl {
-  Impl(std::uint32_t domain_id, proto::NodeId node_id, const std::string& config)
-      : node(node_id), participant(domain_id, config),
-        state_writer(participant.writer(participant.topic(hmpc_dds_ForearmState_desc, kStateTopic),
-                                        kStateTopic)),
-        telemetry_writer(participant.writer(
-            participant.topic(hmpc_dds_ForearmTelemetry_desc, kTelemetryTopic), kTelemetryTopic)),
-        command_reader(participant.reader(
-            participant.topic(hmpc_dds_ForearmCommand_desc, kCommandTopic), kCommandTopic)) {}
+  Impl(std::uint32_t domain_id, proto::NodeId node_id, const std::string& config,
+       const std::string& ns)
+      : node(node_id), ros_namespace(ns), topics(ns), participant(domain_id, config),
+        joint_states(participant, topics.joint_states, Qos::state()),
+        telemetry(participant, topics.telemetry, Qos::state()),
+        diagnostics(participant, topics.diagnostics, Qos::state()),
+        commands(participant, topics.command, Qos::command(kCommandDeadlineS)),
+        trajectories(participant, topics.joint_trajectory, Qos::state()),
+        hardware_id("forearm board node " + std::to_string(unsigned{node_id})),
+        diagnostic_name(ns.substr(1) + "/board") {
+    points.reserve(kMaxTrajectoryPoints);
+  }
+
+  void reject(const char* what, const Verdict& verdict) {
+    rejects.add(verdict.reason);
+    std::fprintf(stderr, "hmpc-forearm-dds: %s rejected a %s: %s: %s\n", ros_namespace.c_str(),
+                 what, rejection_name(verdict.reason), verdict.detail.c_str());
+  }
+
+  bool publish_diagnostics(const ForearmStateSample& s, double now) {
+    DiagnosticsText text = DiagnosticsText::of(s);
+    if (now < next_diagnostics_s && text == last_diagnostics) return true;
+    last_diagnostics = text;
+    next_diagnostics_s = now + kDiagnosticsPeriodS;
+    std::array<msg::KeyValue, kDiagnosticKeys.size()> values{};
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      values[i].key = borrow(kDiagnosticKeys[i]);
+      values[i].value = borrow(text.values[i].c_str());
+    }
+    const bool faulted = s.telemetry.mode == proto::BoardMode::kFault || s.telemetry.faults != 0;
+    const std::string message =
+        faulted
+            ? "fault " + text.values[1]
+            : text.values[0] + (s.telemetry.mode == proto::BoardMode::kRun ? ", " + text.values[2]
+                                                                           : std::string());
+    msg::DiagnosticStatus status{};
+    status.level =
+        static_cast<std::uint8_t>(faulted ? DiagnosticLevel::kError : DiagnosticLevel::kOk);
+    status.name = borrow(diagnostic_name.c_str());
+    status.message = borrow(message.c_str());
+    status.hardware_id = borrow(hardware_id.c_str());
+    status.values = borrow<decltype(status.values)>(values.data(), values.size());
+    msg::DiagnosticArray array{};
+    array.header.stamp = from_seconds<msg::Time>(now);
+    array.header.frame_id = borrow("");
+    array.status = borrow<decltype(array.status)>(&status, 1);
+    return diagnostics.write(array);
+  }
 
   proto::NodeId node;
+  std::string ros_namespace;
+  Topics topics;
   Participant participant;
-  dds_entity_t state_writer;
-  dds_entity_t telemetry_writer;
-  dds_entity_t command_reader;
-  std::uint64_t rejected = 0;
+  Writer<msg::JointState> joint_states;
+  Writer<msg::ForearmTelemetry> telemetry;
+  Writer<msg::DiagnosticArray> diagnostics;
+  Reader<msg::ModeCommand> commands;
+  Reader<msg::JointTrajectory> trajectories;
+  std::string hardware_id, diagnostic_name;
+  std::vector<host::TrajectoryPoint> points;
+  RejectCounters rejects;
+  DiagnosticsText last_diagnostics;
+  double next_diagnostics_s = 0;
+  std::uint32_t deadline_misses = 0;
+  std::uint32_t alive_commanders = 0;
+  bool commanded = false;  // a command came since the last silence
+  std::uint64_t silences = 0;
 };
 
 ForearmDdsBridge::ForearmDdsBridge(std::uint32_t domain_id, proto::NodeId node,
-                                   const std::string& config) {
+                                   const std::string& config, const std::string& ros_namespace) {
   if (node > proto::kMaxNodeId) {
     throw std::invalid_argument("forearm node " + std::to_string(node) + " is outside 0.." +
                                 std::to_string(proto::kMaxNodeId));
   }
-  impl_ = std::make_unique<Impl>(domain_id, node, config);
+  impl_ =
+      std::make_unique<Impl>(domain_id, node, config, namespace_or_default(ros_namespace, node));
 }
 
 ForearmDdsBridge::~ForearmDdsBridge() = default;
 
-bool ForearmDdsBridge::publish(const ForearmStateSample& state) {
-  hmpc_dds_ForearmState c = to_c(state);
-  c.node = impl_->node;
-  return dds_write(impl_->state_writer, &c) == DDS_RETCODE_OK;
+bool ForearmDdsBridge::publish(const ForearmStateSample& s) {
+  Impl& d = *impl_;
+  const double now = unix_time_s();
+  const msg::Time stamp = from_seconds<msg::Time>(now);
+  const char* names[] = {kJointName};
+  const double position[] = {s.theta};
+  const double velocity[] = {s.theta_dot};
+  const double effort[] = {s.telemetry.tau_p + s.telemetry.tau_m};
+  msg::JointState joint{};
+  joint.header.stamp = stamp;
+  joint.header.frame_id = borrow("");
+  joint.name = borrow(names, 1);
+  joint.position = borrow(position, 1);
+  joint.velocity = borrow(velocity, 1);
+  joint.effort = borrow(effort, 1);
+
+  const ForearmTelemetrySample& t = s.telemetry;
+  msg::ForearmTelemetry m{};
+  m.header.stamp = stamp;
+  m.header.frame_id = borrow("");
+  m.board_mode = static_cast<std::uint8_t>(t.mode);
+  m.faults = t.faults;
+  m.strategy = borrow(strategy_name(t.strategy));
+  m.solve_status = static_cast<std::uint8_t>(t.solve_status);
+  m.coarse_iterations = t.coarse_iterations;
+  m.fine_iterations = t.fine_iterations;
+  m.solve_time_us = t.solve_time_us;
+  m.target_position = t.theta_d;
+  m.tracking_error = t.tracking_error;
+  m.pressure = t.pressure_pa;
+  m.valve_voltage = t.v_p;
+  m.motor_voltage = t.v_m;
+  m.muscle_torque = t.tau_p;
+  m.motor_torque = t.tau_m;
+  const bool joint_ok = d.joint_states.write(joint);
+  const bool telemetry_ok = d.telemetry.write(m);
+  return joint_ok && telemetry_ok && d.publish_diagnostics(s, now);
 }
 
-bool ForearmDdsBridge::publish(const ForearmTelemetrySample& telemetry) {
-  hmpc_dds_ForearmTelemetry c = to_c(telemetry);
-  c.node = impl_->node;
-  return dds_write(impl_->telemetry_writer, &c) == DDS_RETCODE_OK;
-}
-
-std::size_t ForearmDdsBridge::poll_commands(const CommandHandler& handler) {
-  std::size_t accepted = 0;
-  take_all<hmpc_dds_ForearmCommand>(impl_->command_reader, [&](const hmpc_dds_ForearmCommand& c) {
-    const ForearmCommandSample command = from_c(c);
-    ValidationResult check = validate(command);
-    if (check.ok && command.node != impl_->node) {
-      check = reject("for node " + std::to_string(command.node) + ", this bridge is node " +
-                     std::to_string(impl_->node));
+void ForearmDdsBridge::poll(const ForearmDdsHandlers& handlers) {
+  Impl& d = *impl_;
+  const double now = unix_time_s();
+  const StampPolicy stamps;
+  d.commands.take([&](const msg::ModeCommand& c) {
+    const Verdict v = validate(c, strategy_names().data(), kStrategyCount, now, stamps);
+    if (!v.ok) return d.reject("ModeCommand", v);
+    std::uint32_t strategy = 0;
+    proto::value_of(proto::kStrategyValues, c.strategy, strategy);
+    d.commanded = true;
+    if (handlers.command) {
+      handlers.command({c.sequence_number, static_cast<proto::RequestedMode>(c.mode),
+                        static_cast<proto::Strategy>(strategy), c.clear_faults});
     }
-    if (!check.ok) {
-      ++impl_->rejected;
-      std::fprintf(stderr, "hmpc-forearm-dds: node %u rejected command %u: %s\n",
-                   unsigned{impl_->node}, unsigned{command.sequence_number}, check.reason.c_str());
-      return;
-    }
-    ++accepted;
-    handler(command);
   });
-  return accepted;
+  d.trajectories.take([&](const msg::JointTrajectory& t) {
+    Verdict v = validate(t, &forearm_joint_limits(), 1, TrajectoryLimits{kMaxTrajectoryPoints}, now,
+                         stamps);
+    if (!v.ok) return d.reject("JointTrajectory", v);
+    d.points.clear();
+    for (std::uint32_t k = 0; k < t.points._length; ++k) {
+      const msg::JointTrajectoryPoint& p = t.points._buffer[k];
+      const bool has_velocity = p.velocities._length > 0;
+      d.points.push_back({to_seconds(p.time_from_start), p.positions._buffer[0],
+                          has_velocity ? p.velocities._buffer[0] : 0, has_velocity});
+    }
+    const bool stamped = t.header.stamp.sec != 0 || t.header.stamp.nanosec != 0;
+    const TrajectoryView view{d.points.data(), d.points.size(),
+                              stamped ? to_seconds(t.header.stamp) - now : 0};
+    if (handlers.trajectory) {
+      v = handlers.trajectory(view);
+      if (!v.ok) d.reject("JointTrajectory", v);
+    }
+  });
+  // A silent commander: a deadline passed without a command, or the commanders' liveliness
+  // lapsed (a process that died, or deleted its writer).
+  const std::uint32_t misses = d.commands.deadline_misses();
+  const std::uint32_t alive = d.commands.alive_writers();
+  const bool silent = misses > d.deadline_misses || alive < d.alive_commanders;
+  d.deadline_misses = misses;
+  d.alive_commanders = alive;
+  if (silent && d.commanded) {
+    d.commanded = false;
+    ++d.silences;
+    std::fprintf(stderr, "hmpc-forearm-dds: %s: the commander fell silent\n",
+                 d.ros_namespace.c_str());
+    if (handlers.commander_silent) handlers.commander_silent();
+  }
 }
 
-std::uint64_t ForearmDdsBridge::rejected_commands() const { return impl_->rejected; }
-
-proto::NodeId ForearmDdsBridge::node() const { return impl_->node; }
+const RejectCounters& ForearmDdsBridge::rejects() const { return impl_->rejects; }
+std::uint64_t ForearmDdsBridge::commander_silences() const { return impl_->silences; }
+const std::string& ForearmDdsBridge::ros_namespace() const { return impl_->ros_namespace; }
 
 // ------------------------------------------------------------------------ client
 
 struct ForearmDdsClient::Impl {
-  Impl(std::uint32_t domain_id, const std::string& config)
-      : participant(domain_id, config),
-        command_writer(participant.writer(
-            participant.topic(hmpc_dds_ForearmCommand_desc, kCommandTopic), kCommandTopic)),
-        state_reader(participant.reader(participant.topic(hmpc_dds_ForearmState_desc, kStateTopic),
-                                        kStateTopic)),
-        telemetry_reader(participant.reader(
-            participant.topic(hmpc_dds_ForearmTelemetry_desc, kTelemetryTopic), kTelemetryTopic)),
-        waitset(checked(dds_create_waitset(participant.handle()), "DDS waitset")) {
-    for (dds_entity_t reader : {state_reader, telemetry_reader}) {
+  Impl(std::uint32_t domain_id, const std::string& config, const std::string& ns)
+      : topics(ns), participant(domain_id, config),
+        commands(participant, topics.command, Qos::command(kCommandDeadlineS)),
+        trajectories(participant, topics.joint_trajectory, Qos::state()),
+        joint_states(participant, topics.joint_states, Qos::state()),
+        telemetry(participant, topics.telemetry, Qos::state()),
+        diagnostics(participant, topics.diagnostics, Qos::state()),
+        waitset(checked(dds_create_waitset(participant.handle()), "a DDS waitset")) {
+    for (dds_entity_t reader : {joint_states.handle(), telemetry.handle(), diagnostics.handle()}) {
       const dds_entity_t condition =
-          checked(dds_create_readcondition(reader, DDS_ANY_STATE), "DDS read condition");
-      const dds_return_t rc = dds_waitset_attach(waitset, condition, 0);
-      if (rc != DDS_RETCODE_OK) throw std::runtime_error(describe("DDS waitset attachment", rc));
+          checked(dds_create_readcondition(reader, DDS_ANY_STATE), "a DDS read condition");
+      checked(dds_waitset_attach(waitset, condition, 0), "a DDS waitset attachment");
     }
   }
 
+  Topics topics;
   Participant participant;
-  dds_entity_t command_writer;
-  dds_entity_t state_reader;
-  dds_entity_t telemetry_reader;
+  Writer<msg::ModeCommand> commands;
+  Writer<msg::JointTrajectory> trajectories;
+  Reader<msg::JointState> joint_states;
+  Reader<msg::ForearmTelemetry> telemetry;
+  Reader<msg::DiagnosticArray> diagnostics;
   dds_entity_t waitset;
+  RejectCounters rejects;
 };
 
-ForearmDdsClient::ForearmDdsClient(std::uint32_t domain_id, const std::string& config)
-    : impl_(std::make_unique<Impl>(domain_id, config)) {}
+ForearmDdsClient::ForearmDdsClient(std::uint32_t domain_id, proto::NodeId node,
+                                   const std::string& config, const std::string& ros_namespace)
+    : impl_(std::make_unique<Impl>(domain_id, config, namespace_or_default(ros_namespace, node))) {}
 
 ForearmDdsClient::~ForearmDdsClient() = default;
 
 bool ForearmDdsClient::wait_for_bridge(double timeout_s) {
-  const dds_time_t deadline = dds_time() + to_duration(timeout_s);
-  for (;;) {
-    dds_publication_matched_status_t status{};
-    if (dds_get_publication_matched_status(impl_->command_writer, &status) != DDS_RETCODE_OK) {
-      return false;
-    }
-    if (status.current_count > 0) return true;
-    if (dds_time() >= deadline) return false;
-    dds_sleepfor(DDS_MSECS(10));
-  }
+  const dds_time_t end = dds_time() + to_duration(timeout_s);
+  return impl_->commands.wait_for_reader(timeout_s) &&
+         impl_->trajectories.wait_for_reader(double(end - dds_time()) * 1e-9);
 }
 
-bool ForearmDdsClient::send(const ForearmCommandSample& command) {
-  const hmpc_dds_ForearmCommand c = to_c(command);
-  return dds_write(impl_->command_writer, &c) == DDS_RETCODE_OK;
+bool ForearmDdsClient::send(const ModeCommandSample& command) {
+  msg::ModeCommand c{};
+  c.header.stamp = from_seconds<msg::Time>(unix_time_s());
+  c.header.frame_id = borrow("");
+  c.sequence_number = command.sequence_number;
+  c.mode = static_cast<std::uint8_t>(command.mode);
+  c.strategy = borrow(strategy_name(command.strategy));
+  c.clear_faults = command.clear_faults;
+  return impl_->commands.write(c);
+}
+
+bool ForearmDdsClient::send(const std::vector<host::TrajectoryPoint>& points) {
+  std::vector<msg::JointTrajectoryPoint> out(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    out[k].positions = borrow(&points[k].position, 1);
+    out[k].velocities = borrow(&points[k].velocity, points[k].has_velocity ? 1 : 0);
+    out[k].time_from_start = from_seconds<msg::Duration>(points[k].time_s);
+  }
+  const char* names[] = {kJointName};
+  msg::JointTrajectory t{};
+  t.header.frame_id = borrow("");
+  t.joint_names = borrow(names, 1);
+  t.points = borrow<decltype(t.points)>(out.data(), out.size());
+  return impl_->trajectories.write(t);
 }
 
 bool ForearmDdsClient::wait_for_delivery(double timeout_s) {
-  return dds_wait_for_acks(impl_->command_writer, to_duration(timeout_s)) == DDS_RETCODE_OK;
+  return impl_->commands.wait_for_acks(timeout_s) && impl_->trajectories.wait_for_acks(timeout_s);
 }
 
 bool ForearmDdsClient::wait_for_data(double timeout_s) {
   return dds_waitset_wait(impl_->waitset, nullptr, 0, to_duration(timeout_s)) > 0;
 }
 
-std::size_t ForearmDdsClient::poll_state(const StateHandler& handler) {
+std::size_t ForearmDdsClient::poll_joint_states(
+    const std::function<void(const JointStateSample&)>& handler) {
   std::size_t count = 0;
-  take_all<hmpc_dds_ForearmState>(impl_->state_reader, [&](const hmpc_dds_ForearmState& c) {
+  impl_->joint_states.take([&](const msg::JointState& j) {
+    Verdict v = validate(j, unix_time_s(), StampPolicy{});
+    if (v.ok && (j.name._length != 1 || std::string(j.name._buffer[0]) != kJointName ||
+                 j.position._length != 1 || j.velocity._length != 1 || j.effort._length != 1)) {
+      v = Verdict::reject(Rejection::kLengthMismatch, "not the one joint's full state");
+    }
+    if (!v.ok) return impl_->rejects.add(v.reason);
     ++count;
-    handler(from_c(c));
+    handler({to_seconds(j.header.stamp), j.position._buffer[0], j.velocity._buffer[0],
+             j.effort._buffer[0]});
   });
   return count;
 }
 
-std::size_t ForearmDdsClient::poll_telemetry(const TelemetryHandler& handler) {
+std::size_t ForearmDdsClient::poll_telemetry(
+    const std::function<void(const ForearmTelemetrySample&)>& handler) {
   std::size_t count = 0;
-  take_all<hmpc_dds_ForearmTelemetry>(impl_->telemetry_reader,
-                                      [&](const hmpc_dds_ForearmTelemetry& c) {
-                                        ++count;
-                                        handler(from_c(c));
-                                      });
+  impl_->telemetry.take([&](const msg::ForearmTelemetry& m) {
+    std::uint32_t strategy = 0;
+    if (m.strategy == nullptr || !proto::value_of(proto::kStrategyValues, m.strategy, strategy) ||
+        std::string(proto::value_name(proto::kBoardModeValues, m.board_mode)) == "?" ||
+        std::string(proto::value_name(proto::kSolveStatusValues, m.solve_status)) == "?") {
+      return impl_->rejects.add(Rejection::kUnknownValue);
+    }
+    ForearmTelemetrySample t;
+    t.stamp_s = to_seconds(m.header.stamp);
+    t.mode = static_cast<proto::BoardMode>(m.board_mode);
+    t.faults = m.faults;
+    t.strategy = static_cast<proto::Strategy>(strategy);
+    t.solve_status = static_cast<proto::SolveStatusCode>(m.solve_status);
+    t.coarse_iterations = m.coarse_iterations;
+    t.fine_iterations = m.fine_iterations;
+    t.solve_time_us = m.solve_time_us;
+    t.theta_d = m.target_position;
+    t.tracking_error = m.tracking_error;
+    t.pressure_pa = m.pressure;
+    t.v_p = m.valve_voltage;
+    t.v_m = m.motor_voltage;
+    t.tau_p = m.muscle_torque;
+    t.tau_m = m.motor_torque;
+    ++count;
+    handler(t);
+  });
   return count;
 }
+
+std::size_t ForearmDdsClient::poll_diagnostics(
+    const std::function<void(const DiagnosticSample&)>& handler) {
+  std::size_t count = 0;
+  const auto text = [](const char* s) { return std::string(s ? s : ""); };
+  impl_->diagnostics.take([&](const msg::DiagnosticArray& a) {
+    for (std::uint32_t i = 0; i < a.status._length; ++i) {
+      const msg::DiagnosticStatus& s = a.status._buffer[i];
+      if (s.level > static_cast<std::uint8_t>(DiagnosticLevel::kStale)) {
+        impl_->rejects.add(Rejection::kUnknownValue);
+        continue;
+      }
+      DiagnosticSample d;
+      d.level = static_cast<DiagnosticLevel>(s.level);
+      d.name = text(s.name);
+      d.message = text(s.message);
+      d.hardware_id = text(s.hardware_id);
+      for (std::uint32_t k = 0; k < s.values._length; ++k) {
+        d.values.emplace_back(text(s.values._buffer[k].key), text(s.values._buffer[k].value));
+      }
+      ++count;
+      handler(d);
+    }
+  });
+  return count;
+}
+
+const RejectCounters& ForearmDdsClient::rejects() const { return impl_->rejects; }
 
 }  // namespace hmpc::dds

@@ -8,9 +8,11 @@
 // tick's host frames before its next tick, whatever the scheduling of the processes.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
+#include "hmpc/host/joint_trajectory.hpp"
 #include "hmpc/models/forearm_target.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
@@ -28,6 +30,8 @@ struct ForearmMasterConfig {
   // buffer (512 ms).
   double sample_period_s = 0.004;
   double stream_lead_s = 0.300;
+  // Points of the longest target trajectory the master holds (allocated once).
+  std::size_t trajectory_capacity = 8192;
 };
 
 // What the board last said, as decoded (every frame validated by the host's Receiver).
@@ -42,7 +46,7 @@ struct BoardReport {
 class ForearmCanMaster {
  public:
   explicit ForearmCanMaster(const ForearmMasterConfig& config)
-      : config_(config), receiver_(config.node) {}
+      : config_(config), receiver_(config.node), trajectory_(config.trajectory_capacity) {}
 
   // Mode and strategy asked for from the next heartbeat on; clear_faults is sent once.
   void request(proto::RequestedMode mode, proto::Strategy strategy, bool clear_faults = false) {
@@ -53,12 +57,25 @@ class ForearmCanMaster {
   // theta_d(t) = offset + amplitude sin(2 pi f (t - t0)) on the host clock, streamed from t0.
   void stream_sinusoid(double amplitude, double frequency_hz, double offset, double t0) {
     target_.set_sinusoid(amplitude, frequency_hz, offset, t0);
-    streaming_ = true;
-    next_sample_s_ = t0;
+    use_trajectory_ = false;
+    start_streaming(t0);
+  }
+  // theta_d(t) = the trajectory's position at t - t0, held before and after it. Streamed from
+  // now_s, or when it replaces a stream, after the samples already sent: the board takes
+  // samples in increasing time only, so the old target's last stream_lead_s still play out.
+  // False, and nothing changed, when it has no points or more than the capacity.
+  bool stream_trajectory(const TrajectoryPoint* points, std::size_t n, double t0, double now_s) {
+    if (!trajectory_.assign(points, n)) return false;
+    use_trajectory_ = true;
+    trajectory_t0_ = t0;
+    start_streaming(streaming_ ? std::max(next_sample_s_, now_s) : now_s);
+    return true;
   }
   void stop_streaming() { streaming_ = false; }
   bool streaming() const { return streaming_; }
-  double target_angle(double t) const { return target_.angle(t); }
+  double target_angle(double t) const {
+    return use_trajectory_ ? trajectory_.position(t - trajectory_t0_) : target_.angle(t);
+  }
 
   // Called every host tick (1 ms in HIL lock-step, or as often as the program wakes); on a
   // heartbeat tick, hands send() the trajectory samples due and the ModeCommand.
@@ -68,7 +85,7 @@ class ForearmCanMaster {
     if (now_s + 1e-9 < next_heartbeat_s_) return;
     next_heartbeat_s_ = now_s + config_.heartbeat_period_s;
     while (streaming_ && next_sample_s_ <= now_s + config_.stream_lead_s) {
-      send(proto::TrajectorySample{float(target_.angle(next_sample_s_)),
+      send(proto::TrajectorySample{float(target_angle(next_sample_s_)),
                                    to_host_time_us(next_sample_s_), 0});
       next_sample_s_ += config_.sample_period_s;
     }
@@ -115,9 +132,17 @@ class ForearmCanMaster {
   }
 
  private:
+  void start_streaming(double from_s) {
+    streaming_ = true;
+    next_sample_s_ = from_s;
+  }
+
   ForearmMasterConfig config_;
   proto::Receiver receiver_;
   forearm::TargetTrajectory<double> target_;
+  JointTrajectoryTarget trajectory_;
+  bool use_trajectory_ = false;
+  double trajectory_t0_ = 0;
   bool streaming_ = false;
   double next_sample_s_ = 0;
   double next_heartbeat_s_ = 0;

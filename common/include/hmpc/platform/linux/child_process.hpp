@@ -101,8 +101,13 @@ class Child {
   }
 
   int stop(double timeout_s) {
-    if (pid_ > 0) ::kill(pid_, SIGTERM);
+    signal(SIGTERM);
     return wait(timeout_s);
+  }
+
+  // Sends a signal while the program runs (e.g. SIGSTOP: a process that hangs).
+  void signal(int number) const {
+    if (pid_ > 0) ::kill(pid_, number);
   }
 
   std::string output() const { return read_file(output_); }
