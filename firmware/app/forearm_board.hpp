@@ -111,7 +111,8 @@ struct BoardCounters {
   std::uint32_t fallbacks = 0;         // run -> hold after repeated bad steps
   std::uint32_t refused_commands = 0;  // valid frames asking for a transition not allowed now
   std::uint32_t mpc_steps = 0;
-  std::uint32_t syncs = 0;  // valid HIL lock-step Sync frames
+  std::uint32_t syncs = 0;                // valid HIL lock-step Sync frames
+  std::uint32_t cost_weight_updates = 0;  // valid CostWeights frames adopted
 };
 
 template <typename Scalar>
@@ -182,6 +183,10 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   void run_mpc() {
     mpc_due_ = false;
     if (this->mode() != proto::BoardMode::kRun) return;
+    if (weights_changed_) {
+      for_each_strategy([&](auto& mpc) { forearm::set_weights(mpc, config_.weights); });
+      weights_changed_ = false;
+    }
     const double start = clock_ ? clock_() : 0.0;
     const double deadline = start + config_.mpc_budget_s;
     const auto stop = [this, deadline] { return clock_ && clock_() > deadline; };
@@ -259,6 +264,19 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
     return c;
   }
   const Config& config() const { return config_; }
+  // The weights a strategy's MPC solves with: its problem's, and for the two-stage MPC its
+  // fast subsystem's (the upper problem's are set with them).
+  const forearm::CostWeights<Scalar>& solver_weights(proto::Strategy s) const {
+    switch (s) {
+      case proto::Strategy::kFine4ms: return fine4_.problem().weights();
+      case proto::Strategy::kFine8ms: return fine8_.problem().weights();
+      case proto::Strategy::kCoarse20ms: return coarse20_.problem().weights();
+      case proto::Strategy::kCoarse40ms: return coarse40_.problem().weights();
+      case proto::Strategy::kTwoStage: return two_stage_.fast_subsystem().weights();
+      case proto::Strategy::kPamOnly: return pam_only_.problem().weights();
+    }
+    return config_.weights;
+  }
   // The last MPC step, as an MPC reports it (for telemetry and compute accounting).
   int last_iterations() const { return last_iterations_; }
   bool last_plan_usable() const { return usable_; }
@@ -326,6 +344,11 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
         if (this->receive(frame, g)) on_gains(g);
         break;
       }
+      case proto::FrameType::kCostWeights: {
+        proto::CostWeights w;
+        if (this->receive(frame, w)) on_cost_weights(w);
+        break;
+      }
       default:  // frames this board sends, not receives
         break;
     }
@@ -379,6 +402,31 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
     c.kd = Scalar(g.kd);
     c.load_velocity_gain = Scalar(g.k_lv);
     if (Pid::config_valid(c)) config_.hold_pid = c;
+  }
+
+  // Adopted by every strategy before the next MPC step (a CAN handler does not touch the MPCs,
+  // which may be mid-solve on a board that solves outside its interrupt). The codec has
+  // checked each value against its range; 0 keeps the present weight.
+  void on_cost_weights(const proto::CostWeights& w) {
+    const auto adopt = [](Scalar& weight, float value) {
+      if (value > 0) weight = Scalar(value);
+    };
+    adopt(config_.weights.w_theta, w.w_theta);
+    adopt(config_.weights.w_P, w.w_p);
+    adopt(config_.weights.w_tau, w.w_tau);
+    adopt(config_.weights.w_v, w.w_v);
+    weights_changed_ = true;
+    ++counters_.cost_weight_updates;
+  }
+
+  template <class F>
+  void for_each_strategy(F&& f) {
+    f(fine4_);
+    f(fine8_);
+    f(coarse20_);
+    f(coarse40_);
+    f(two_stage_);
+    f(pam_only_);
   }
 
   void enter_hold() {
@@ -468,6 +516,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   LayerWork last_work_{};
   bool mpc_due_ = false;
   bool needs_initialization_ = false;
+  bool weights_changed_ = false;
   int consecutive_bad_steps_ = 0;
   proto::SolveTelemetry telemetry_{};
   Outputs<Scalar> outputs_{};

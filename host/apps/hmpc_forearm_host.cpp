@@ -266,7 +266,7 @@ class Host {
         "board_watchdog_trips=%u board_solver_failures=%u board_overruns=%u "
         "telemetry_frames=%llu solves=%llu solve_time_max_us=%.0f solve_time_median_us=%.0f "
         "host_rejected_frames=%u frames_dropped=%llu frames_corrupted=%llu frames_silenced=%llu "
-        "dds_commands=%llu dds_trajectories=%llu dds_rejected=%llu dds_rejects=%s "
+        "dds_commands=%llu dds_trajectories=%llu dds_weights=%llu dds_rejected=%llu dds_rejects=%s "
         "dds_commander_silences=%llu heartbeat_max_gap_ms=%.0f "
         "last_heartbeat_s=%.3f interface_down=%llu\n",
         kProgram, now_s_, wall_s, run_start_s_, run_stop_s_,
@@ -285,6 +285,7 @@ class Host {
         static_cast<unsigned long long>(f.dropped), static_cast<unsigned long long>(f.corrupted),
         static_cast<unsigned long long>(f.silenced), static_cast<unsigned long long>(dds_commands_),
         static_cast<unsigned long long>(dds_trajectories_),
+        static_cast<unsigned long long>(dds_weights_),
         static_cast<unsigned long long>(dds_ ? dds_->rejects().total() : 0),
         dds_ ? dds_->rejects().summary().c_str() : "none",
         static_cast<unsigned long long>(dds_ ? dds_->commander_silences() : 0),
@@ -359,6 +360,16 @@ class Host {
     std::fprintf(stderr, "%s: DDS trajectory of %zu points over %.3f s at %.3f s\n", kProgram,
                  view.count, view.points[view.count - 1].time_s, now_s_);
     return hmpc::dds::Verdict::accept();
+  }
+
+  void on_weights(const proto::CostWeights& w) {
+    ++dds_weights_;
+    std::fprintf(stderr,
+                 "%s: DDS cost weights at %.3f s (0 keeps the board's): w_theta %g w_p %g "
+                 "w_tau %g w_v %g\n",
+                 kProgram, now_s_, double(w.w_theta), double(w.w_p), double(w.w_tau),
+                 double(w.w_v));
+    master_.send_cost_weights(w);
   }
 
   // The commander of a run went silent: hold where the arm is.
@@ -438,12 +449,12 @@ class Host {
   double last_active_heartbeat_s_ = -1, heartbeat_max_gap_s_ = 0, last_heartbeat_s_ = -1;
   std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
   std::uint64_t interface_down_ = 0;  // sends and receives that found the interface down
-  std::uint64_t dds_commands_ = 0, dds_trajectories_ = 0;
+  std::uint64_t dds_commands_ = 0, dds_trajectories_ = 0, dds_weights_ = 0;
   std::vector<hmpc::host::TrajectoryPoint> trajectory_;  // reserved: no allocation per target
   const hmpc::dds::ForearmDdsHandlers dds_handlers_{
       [this](const hmpc::dds::ModeCommandSample& c) { on_command(c); },
       [this](const hmpc::dds::TrajectoryView& v) { return on_trajectory(v); },
-      [this] { on_commander_silent(); }};
+      [this] { on_commander_silent(); }, [this](const proto::CostWeights& w) { on_weights(w); }};
   SolveTimeHistogram solve_times_;
 };
 

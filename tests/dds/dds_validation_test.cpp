@@ -73,27 +73,47 @@ TEST(DdsValidation, RejectsEachBadTrajectoryNamingWhy) {
     const char* named;  // the detail must contain it
   };
   Case cases[] = {
-      {"an unknown joint", {{"hip", "ankle"}, {{0, 0}}, {}, {0}}, Rejection::kUnknownValue, "ankle"},
+      {"an unknown joint",
+       {{"hip", "ankle"}, {{0, 0}}, {}, {0}},
+       Rejection::kUnknownValue,
+       "ankle"},
       {"a joint twice", {{"hip", "hip"}, {{0, 0}}, {}, {0}}, Rejection::kDuplicateName, "hip"},
       {"a joint missing", {{"hip"}, {{0}}, {}, {0}}, Rejection::kLengthMismatch, "joint_names"},
       {"too many points",
        {{"hip", "knee"}, {{0, 0}, {0, 0}, {0, 0}, {0, 0}, {0, 0}}, {}, {0, 1, 2, 3, 4}},
-       Rejection::kTooLarge, "5 points"},
-      {"a short position array", {{"hip", "knee"}, {{0}}, {}, {0}}, Rejection::kLengthMismatch,
+       Rejection::kTooLarge,
+       "5 points"},
+      {"a short position array",
+       {{"hip", "knee"}, {{0}}, {}, {0}},
+       Rejection::kLengthMismatch,
        "positions"},
-      {"a short velocity array", {{"hip", "knee"}, {{0, 0}}, {{0}}, {0}},
-       Rejection::kLengthMismatch, "velocities"},
-      {"a NaN position", {{"hip", "knee"}, {{0, kNaN}}, {}, {0}}, Rejection::kNotFinite,
+      {"a short velocity array",
+       {{"hip", "knee"}, {{0, 0}}, {{0}}, {0}},
+       Rejection::kLengthMismatch,
+       "velocities"},
+      {"a NaN position",
+       {{"hip", "knee"}, {{0, kNaN}}, {}, {0}},
+       Rejection::kNotFinite,
        "positions[1]"},
-      {"a knee beyond its range", {{"hip", "knee"}, {{0, 0.5}}, {}, {0}}, Rejection::kOutOfRange,
+      {"a knee beyond its range",
+       {{"hip", "knee"}, {{0, 0.5}}, {}, {0}},
+       Rejection::kOutOfRange,
        "knee"},
-      {"a fast given velocity", {{"hip", "knee"}, {{0, 0}}, {{6, 0}}, {0}}, Rejection::kRateLimit,
+      {"a fast given velocity",
+       {{"hip", "knee"}, {{0, 0}}, {{6, 0}}, {0}},
+       Rejection::kRateLimit,
        "hip"},
-      {"a fast segment", {{"hip", "knee"}, {{0, 0}, {0.9, 0}}, {}, {0, 0.1}}, Rejection::kRateLimit,
+      {"a fast segment",
+       {{"hip", "knee"}, {{0, 0}, {0.9, 0}}, {}, {0, 0.1}},
+       Rejection::kRateLimit,
        "between points[0] and [1]"},
-      {"time going back", {{"hip", "knee"}, {{0, 0}, {0, 0}}, {}, {1, 0.5}},
-       Rejection::kNotIncreasing, "points[1]"},
-      {"a time beyond the longest", {{"hip", "knee"}, {{0, 0}}, {}, {11}}, Rejection::kOutOfRange,
+      {"time going back",
+       {{"hip", "knee"}, {{0, 0}, {0, 0}}, {}, {1, 0.5}},
+       Rejection::kNotIncreasing,
+       "points[1]"},
+      {"a time beyond the longest",
+       {{"hip", "knee"}, {{0, 0}}, {}, {11}},
+       Rejection::kOutOfRange,
        "time_from_start"},
   };
   for (Case& c : cases) {
@@ -217,8 +237,8 @@ TEST(JointTrajectory, SegmentBoundsAreTheInterpolantsExtremes) {
 
 TEST(JointTrajectory, HermiteMeetsThePointsWithTheirVelocitiesAndHoldsTheEnds) {
   hmpc::host::JointTrajectoryTarget target(3);
-  const TrajectoryPoint points[] = {{0.5, 0.1, 1.0, true}, {1.5, 0.6, -0.5, true},
-                                    {2.0, 0.2, 0.0, false}};
+  const TrajectoryPoint points[] = {
+      {0.5, 0.1, 1.0, true}, {1.5, 0.6, -0.5, true}, {2.0, 0.2, 0.0, false}};
   ASSERT_TRUE(target.assign(points, 3));
   EXPECT_EQ(target.position(0.0), 0.1) << "held before the first point";
   EXPECT_DOUBLE_EQ(target.position(0.5), 0.1);

@@ -58,7 +58,8 @@ struct Received {
             [this] {
               if (!commands.empty() && commands.back().mode == proto::RequestedMode::kRun)
                 ++silences_while_running;
-            }};
+            },
+            {}};
   }
 };
 
@@ -160,6 +161,33 @@ TEST(ForearmCli, IdleWithClearFaultsSendsOneCommandAndNoTarget) {
   EXPECT_TRUE(got.trajectories.empty());
 }
 
+TEST(ForearmCli, WeightsReachTheBridge) {
+  dds::ForearmDdsBridge bridge(104, 5, dds::loopback_config());
+  std::vector<proto::CostWeights> got;
+  dds::ForearmDdsHandlers handlers;
+  handlers.weights = [&](const proto::CostWeights& w) { got.push_back(w); };
+  auto cli = std::async(std::launch::async, [] {
+    return run_cli("--domain 104 --node 5 weights w_theta=80 w_tau=0.2");
+  });
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(2 * kPatience_s);
+  while (cli.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready &&
+         std::chrono::steady_clock::now() < deadline) {
+    bridge.poll(handlers);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  bridge.poll(handlers);
+  const Outcome outcome = cli.get();
+  EXPECT_EQ(outcome.status, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find("sent 2 cost weights to node 5"), std::string::npos)
+      << outcome.output;
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].w_theta, 80.0f);
+  EXPECT_EQ(got[0].w_tau, 0.2f);
+  EXPECT_EQ(got[0].w_p, 0.0f);
+  EXPECT_EQ(got[0].w_v, 0.0f);
+}
+
 TEST(ForearmCli, WatchPrintsJointStateTelemetryAndDiagnostics) {
   dds::ForearmDdsBridge bridge(102, 4, dds::loopback_config());
   dds::ForearmStateSample state;
@@ -229,6 +257,11 @@ TEST(ForearmCli, BadArgumentsAndTargetsExit2NamingTheProblem) {
       {"run --duration -1", "--duration must not be negative"},
       {"watch --samples 0", "--samples must be an integer in 1..1000000"},
       {"idle extra", "unexpected argument 'extra'"},
+      {"weights", "weights needs at least one NAME=VALUE"},
+      {"weights w_theta", "weights takes NAME=VALUE, got 'w_theta'"},
+      {"weights w_theta=x", "needs a finite number, got 'x'"},
+      {"weights w_theta=1000", "invalid weights: values[0] (w_theta) = 1000 is outside 0.05..400"},
+      {"weights w_q=1", "invalid weights: names[0] 'w_q' is not one of: w_theta, w_p, w_tau, w_v"},
   };
   for (const Case& c : cases) {
     const Outcome outcome = run_cli(c.arguments);

@@ -52,7 +52,8 @@ struct Received {
               start_delays.push_back(v.start_delay_s);
               return dds::Verdict::accept();
             },
-            [this] { ++silences; }};
+            [this] { ++silences; },
+            {}};
   }
 };
 
@@ -323,9 +324,13 @@ TEST(ForearmDdsBridge, ACommanderThatStopsIsNoticedWithinTheDeadline) {
   const auto handlers = got.handlers();
   auto client = std::make_unique<dds::ForearmDdsClient>(95, 0, dds::loopback_config());
   ASSERT_TRUE(client->wait_for_bridge(kPatience_s));
-  // Commands at 10 Hz for a second: no silence.
+  // Commands at 10 Hz for a second: no silence, even when another operator's client (with its
+  // own command writer) comes and goes meanwhile.
+  auto other = std::make_unique<dds::ForearmDdsClient>(95, 0, dds::loopback_config());
+  ASSERT_TRUE(other->wait_for_bridge(kPatience_s));
   auto last = std::chrono::steady_clock::now();
   for (int i = 0; i < 10; ++i) {
+    if (i == 3) other.reset();
     ASSERT_TRUE(client->send(run_command(std::uint32_t(i))));
     last = std::chrono::steady_clock::now();
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -393,6 +398,50 @@ TEST(ForearmDdsBridge, ACommanderOfferingNoDeadlineIsNotHeard) {
   bridge.poll(handlers);
   ASSERT_EQ(got.commands.size(), 1u);
   EXPECT_EQ(got.commands[0].sequence_number, 2u);
+}
+
+TEST(ForearmDdsBridge, CostWeightsAreCheckedAndHandedOnAsTheCanFrame) {
+  // The names and ranges are the CAN frame's signals', not a copy.
+  const auto& limits = dds::forearm_weight_limits();
+  const proto::Signal signals[] = {
+      proto::Signal::kCostWeightsTheta, proto::Signal::kCostWeightsPressure,
+      proto::Signal::kCostWeightsTorque, proto::Signal::kCostWeightsValve};
+  for (std::size_t i = 0; i < limits.size(); ++i) {
+    const auto& spec = hmpc::protocol::signal_spec(signals[i]);
+    EXPECT_STREQ(limits[i].name, spec.name);
+    EXPECT_EQ(limits[i].min, spec.factor) << "the smallest non-zero weight; 0 means keep";
+    EXPECT_EQ(limits[i].max, spec.max);
+  }
+  dds::ForearmDdsBridge bridge(103, 0, dds::loopback_config());
+  dds::ForearmDdsClient client(103, 0, dds::loopback_config());
+  ASSERT_TRUE(client.wait_for_bridge(kPatience_s));
+  std::vector<proto::CostWeights> got;
+  dds::ForearmDdsHandlers handlers;
+  handlers.weights = [&](const proto::CostWeights& w) { got.push_back(w); };
+  const auto sent = [&](const std::vector<std::pair<std::string, double>>& weights) {
+    const bool delivered = client.send(weights) && client.wait_for_delivery(kPatience_s);
+    bridge.poll(handlers);
+    return delivered;
+  };
+  ASSERT_TRUE(sent({{"w_v", 0.004}, {"w_theta", 80.0}}));
+  ASSERT_TRUE(sent({{"w_x", 1.0}}));                                       // unknown
+  ASSERT_TRUE(sent({{"w_theta", 500.0}}));                                 // above its range
+  ASSERT_TRUE(sent({{"w_tau", 0.0}}));                                     // 0 is not a weight
+  ASSERT_TRUE(sent({{"w_p", std::numeric_limits<double>::quiet_NaN()}}));  // not finite
+  ASSERT_TRUE(sent({{"w_p", 1.0}, {"w_p", 2.0}}));                         // twice
+  ASSERT_TRUE(eventually([&] {
+    bridge.poll(handlers);
+    return got.size() + bridge.rejects().total() >= 6;
+  }));
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].w_theta, 80.0f);
+  EXPECT_EQ(got[0].w_p, 0.0f) << "not given: the board keeps it";
+  EXPECT_EQ(got[0].w_tau, 0.0f);
+  EXPECT_EQ(got[0].w_v, 0.004f);
+  EXPECT_EQ(bridge.rejects().count(dds::Rejection::kUnknownValue), 1u);
+  EXPECT_EQ(bridge.rejects().count(dds::Rejection::kOutOfRange), 2u);
+  EXPECT_EQ(bridge.rejects().count(dds::Rejection::kNotFinite), 1u);
+  EXPECT_EQ(bridge.rejects().count(dds::Rejection::kDuplicateName), 1u);
 }
 
 TEST(ForearmDdsBridge, RefusesABadNodeNamespaceOrConfiguration) {

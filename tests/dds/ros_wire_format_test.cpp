@@ -226,9 +226,9 @@ TEST_F(RosWireFormat, JointTrajectory) {
   want.header(0, 0, "").strs({"elbow", "wrist"}).u32(2);
   want.f64s({0.0, 0.1}).f64s({}).f64s({}).f64s({}).i32(0).u32(0);
   want.f64s({0.5, 0.6}).f64s({1.0, -1.0}).f64s({2.0, 3.0}).f64s({4.5}).i32(1).u32(500000000);
-  expect_bytes(round_trip(m, "/hmpc/test/joint_trajectory",
-                          "trajectory_msgs::msg::dds_::JointTrajectory_"),
-               want);
+  expect_bytes(
+      round_trip(m, "/hmpc/test/joint_trajectory", "trajectory_msgs::msg::dds_::JointTrajectory_"),
+      want);
 }
 
 TEST_F(RosWireFormat, DiagnosticArray) {
@@ -253,8 +253,7 @@ TEST_F(RosWireFormat, DiagnosticArray) {
   want.u8(2).str("hmpc/forearm_0/board").str("fault").str("forearm node 0").u32(2);
   want.str("mode").str("run").str("faults").str("0x00");
   want.u8(0).str("b").str("").str("hw").u32(0);
-  expect_bytes(
-      round_trip(m, "/diagnostics", "diagnostic_msgs::msg::dds_::DiagnosticArray_"), want);
+  expect_bytes(round_trip(m, "/diagnostics", "diagnostic_msgs::msg::dds_::DiagnosticArray_"), want);
 }
 
 TEST_F(RosWireFormat, OurModeCommandCostWeightsAndTelemetry) {
@@ -278,9 +277,8 @@ TEST_F(RosWireFormat, OurModeCommandCostWeightsAndTelemetry) {
   weights.values = dds::borrow(values, 2);
   Cdr want_weights;
   want_weights.header(0, 0, "").strs({"q_theta", "r_motor"}).f64s({1000.0, 0.5});
-  expect_bytes(
-      round_trip(weights, "/hmpc/test/cost_weights", "hmpc_msgs::msg::dds_::CostWeights_"),
-      want_weights);
+  expect_bytes(round_trip(weights, "/hmpc/test/cost_weights", "hmpc_msgs::msg::dds_::CostWeights_"),
+               want_weights);
 
   msg::ForearmTelemetry t{};
   t.header.stamp = {3, 4};
@@ -302,8 +300,8 @@ TEST_F(RosWireFormat, OurModeCommandCostWeightsAndTelemetry) {
   Cdr want_t;
   want_t.header(3, 4, "").u8(3).u8(0x21).str("fine_4ms").u8(1).u16(300).u16(2).u32(1234);
   want_t.f64(0.5).f64(-0.01).f64(4e5).f64(1.5).f64(-2.0).f64(3.25).f64(0.75);
-  expect_bytes(
-      round_trip(t, "/hmpc/test/telemetry", "hmpc_msgs::msg::dds_::ForearmTelemetry_"), want_t);
+  expect_bytes(round_trip(t, "/hmpc/test/telemetry", "hmpc_msgs::msg::dds_::ForearmTelemetry_"),
+               want_t);
 }
 
 TEST(RosNames, TopicNamesFollowRos2) {

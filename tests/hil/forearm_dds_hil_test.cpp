@@ -1,9 +1,9 @@
 // DDS to CAN, end to end: hmpc-forearm-cli sends mode commands and a JointTrajectory over
 // Cyclone DDS (loopback, its own domain id) to hmpc-forearm-host, which drives
 // hmpc-forearm-board over vcan0 with the Simbody plant in lock-step. The board's mode and
-// target, as the host publishes them back over DDS, must follow the CLI; a malformed sample
-// must be rejected and counted, never acted on; a commander that hangs must leave the arm
-// holding.
+// target, as the host publishes them back over DDS, must follow the CLI, and so must the
+// MPC's cost weights; a malformed sample must be rejected and counted, never acted on; a
+// commander that hangs must leave the arm holding.
 // ctest runs this binary through hil/vcan/run-with-vcan.sh.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -173,6 +173,16 @@ TEST(ForearmDdsOverCan, CliCommandsDriveTheBoardMalformedSamplesAreRejectedASile
   EXPECT_EQ(unchanged, watched) << "the rejected sample changed the board's mode, strategy or "
                                    "target";
 
+  // New cost weights while it runs: over DDS to the host, over CAN to the board, which adopts
+  // them (its summary at the end) and runs on.
+  ASSERT_EQ(run_cli({"weights", "w_theta=80", "w_v=0.004"}, output), 0) << output;
+  ASSERT_TRUE(await_errors(host, "DDS cost weights")) << host.errors();
+  EXPECT_EQ(watch(25,
+                  [&](const hmpc::dds::ForearmTelemetrySample& t) {
+                    EXPECT_EQ(t.mode, proto::BoardMode::kRun);
+                  }),
+            25);
+
   // The commander hangs: the host notices within the command deadline and holds.
   run.signal(SIGSTOP);
   ASSERT_TRUE(await_errors(host, "commander silent at")) << host.errors();
@@ -197,6 +207,11 @@ TEST(ForearmDdsOverCan, CliCommandsDriveTheBoardMalformedSamplesAreRejectedASile
   EXPECT_EQ(errors.find("commander silent at"), errors.rfind("commander silent at"))
       << "only the run's silence holds the arm: " << errors;
   const auto board_summary = hmpc::platform::parse_summary(board.output());
+  EXPECT_EQ(board_summary.at("cost_weight_updates"), "1");
+  EXPECT_EQ(board_summary.at("w_theta"), "80");
+  EXPECT_EQ(board_summary.at("w_p"), "30") << "kept";
+  EXPECT_EQ(board_summary.at("w_v"), "0.004");
+  EXPECT_EQ(summary.at("dds_weights"), "1");
   EXPECT_EQ(board_summary.at("faults"), "0x00");
   EXPECT_EQ(board_summary.at("rejected_frames"), "0");
 }

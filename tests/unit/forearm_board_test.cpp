@@ -84,6 +84,10 @@ class Rig {
     return encode(host_, proto::ModeCommand{mode, strategy, false, now_us(), 0});
   }
   void deliver(const proto::Frame& frame) { board_->on_frame(frame); }
+  template <class Message>
+  void send_from_host(const Message& message) {
+    deliver(encode(host_, message));
+  }
   std::uint8_t last_host_counter() const {
     const std::uint8_t next = host_.next_counter[proto::index_of(proto::FrameType::kModeCommand)];
     return std::uint8_t((next + proto::kCounterModulo - 1) % proto::kCounterModulo);
@@ -443,6 +447,29 @@ TEST(ForearmBoard, TwoStageRunTracksTheStreamedTrajectory) {
   EXPECT_EQ(rig.last_status().mode, BoardMode::kRun);
   EXPECT_EQ(rig.last_status().strategy, Strategy::kTwoStage);
   EXPECT_NE(rig.last_command().v_m, 0.0f);  // the motor takes part
+}
+
+// A CostWeights frame in run: every strategy solves with the new weights from the next MPC
+// step on, the weights sent as 0 unchanged; the run goes on.
+TEST(ForearmBoard, CostWeightsAreAdoptedByEveryStrategyBeforeTheNextStep) {
+  Rig rig;
+  start_tracking(rig, Strategy::kTwoStage);
+  run_tracking(rig, 100, nullptr);
+  const hmpc::forearm::CostWeights<double> before{};
+  rig.send_from_host(proto::CostWeights{80, 0, 0, 0.004f, 0});
+  EXPECT_EQ(rig.board().solver_weights(Strategy::kTwoStage).w_theta, before.w_theta)
+      << "not while the MPC may be solving";
+  run_tracking(rig, 4, nullptr);
+  for (const proto::EnumValue& s : proto::kStrategyValues) {
+    const auto& w = rig.board().solver_weights(static_cast<Strategy>(s.value));
+    EXPECT_EQ(w.w_theta, 80) << s.name;
+    EXPECT_EQ(w.w_P, before.w_P) << s.name;
+    EXPECT_EQ(w.w_tau, before.w_tau) << s.name;
+    EXPECT_NEAR(w.w_v, 0.004, 1e-9) << s.name;
+  }
+  EXPECT_EQ(rig.board().counters().cost_weight_updates, 1u);
+  run_tracking(rig, 500, nullptr);
+  EXPECT_EQ(rig.board().faults(), 0);
 }
 
 TEST(ForearmBoard, SwitchesStrategyInRun) {

@@ -257,7 +257,8 @@ TEST(ProtocolIds, NodeBasePlusFrameOffset) {
   FrameType type{};
   NodeId node = 0;
   EXPECT_FALSE(identify(0x0FF, type, node));
-  EXPECT_FALSE(identify(0x10A, type, node));  // offset 10: no frame
+  EXPECT_TRUE(identify(0x10A, type, node));   // offset 10: CostWeights
+  EXPECT_FALSE(identify(0x10B, type, node));  // offset 11: no frame
   EXPECT_FALSE(identify(0x200, type, node));
 }
 

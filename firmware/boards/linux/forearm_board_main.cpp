@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
             "transmit_failures=%llu interface_down=%llu timer_overruns=%llu max_busy_ms=%.3f "
             "max_wakeup_latency_ms=%.3f "
             "heap_allocations_in_loop=%llu safe_outputs_sent=%d heartbeat_timeout_ticks=%d "
-            "sensor_timeout_ticks=%d\n",
+            "sensor_timeout_ticks=%d cost_weight_updates=%u w_theta=%g w_p=%g w_tau=%g w_v=%g\n",
             kProgram, static_cast<unsigned long long>(stats.ticks), r.elapsed_s,
             r.elapsed_s > 0 ? double(stats.ticks) / r.elapsed_s : 0.0,
             proto::value_name(proto::kBoardModeValues, std::uint32_t(board.mode())),
@@ -99,6 +99,8 @@ int main(int argc, char** argv) {
             static_cast<unsigned long long>(stats.timer_overruns), stats.max_busy_s * 1e3,
             stats.max_wakeup_latency_s * 1e3,
             static_cast<unsigned long long>(r.heap_allocations_in_loop), r.safe_sent ? 1 : 0,
-            config.heartbeat_timeout_ticks, config.sensor_timeout_ticks);
+            config.heartbeat_timeout_ticks, config.sensor_timeout_ticks, c.cost_weight_updates,
+            double(board.config().weights.w_theta), double(board.config().weights.w_P),
+            double(board.config().weights.w_tau), double(board.config().weights.w_v));
       });
 }

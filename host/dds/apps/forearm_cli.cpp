@@ -13,6 +13,7 @@
 #include <exception>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "hmpc/dds/endpoint.hpp"
@@ -40,6 +41,7 @@ void usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: hmpc-forearm-cli [OPTIONS] run|hold|idle [COMMAND OPTIONS]\n"
+      "       hmpc-forearm-cli [OPTIONS] weights NAME=VALUE...\n"
       "       hmpc-forearm-cli [OPTIONS] watch [--samples K]\n"
       "options:\n"
       "  --domain N        DDS domain id, 0..232 (default 0)\n"
@@ -51,6 +53,9 @@ void usage(std::FILE* out) {
       "                    then hold\n"
       "  hold              hold the present angle with the joint PID\n"
       "  idle              safe outputs\n"
+      "  weights           set tracking-cost weights (Eq. 3.3) of the running MPC: w_theta\n"
+      "                    (0.05..400), w_p (0.05..400), w_tau (0.0005..4), w_v\n"
+      "                    (0.000005..0.04); the others stay as they are\n"
       "  watch             print the node's joint state, telemetry and diagnostics\n"
       "command options (run, hold, idle):\n"
       "  --strategy NAME   fine_4ms, fine_8ms, coarse_20ms, coarse_40ms, two_stage (default),\n"
@@ -83,6 +88,7 @@ struct Options {
   bool sequence_given = false;
   unsigned long sequence = 0;
   long samples = 10;
+  std::vector<std::pair<std::string, double>> weights;
 };
 
 // Errors name the option and the value; main prints usage after them.
@@ -183,15 +189,26 @@ Options parse(int argc, char** argv) {
     } else if (arg.rfind("--", 0) == 0) {
       throw ArgumentError{"unknown option '" + arg + "'"};
     } else if (o.command.empty()) {
-      if (arg != "run" && arg != "hold" && arg != "idle" && arg != "watch") {
-        throw ArgumentError{"unknown command '" + arg + "' (run, hold, idle or watch)"};
+      if (arg != "run" && arg != "hold" && arg != "idle" && arg != "weights" && arg != "watch") {
+        throw ArgumentError{"unknown command '" + arg + "' (run, hold, idle, weights or watch)"};
       }
       o.command = arg;
+    } else if (o.command == "weights") {
+      const auto equals = arg.find('=');
+      if (equals == std::string::npos) {
+        throw ArgumentError{"weights takes NAME=VALUE, got '" + arg + "'"};
+      }
+      o.weights.emplace_back(arg.substr(0, equals), number(arg, arg.substr(equals + 1)));
     } else {
       throw ArgumentError{"unexpected argument '" + arg + "' after command " + o.command};
     }
   }
-  if (o.command.empty()) throw ArgumentError{"no command given (run, hold, idle or watch)"};
+  if (o.command.empty()) {
+    throw ArgumentError{"no command given (run, hold, idle, weights or watch)"};
+  }
+  if (o.command == "weights" && o.weights.empty()) {
+    throw ArgumentError{"weights needs at least one NAME=VALUE"};
+  }
   if ((o.sine || o.offset_given) && o.command != "run") {
     throw ArgumentError{"--sine and --offset are targets of run"};
   }
@@ -305,6 +322,37 @@ int send(const Options& o, const dds::ModeCommandSample& command,
   return 0;
 }
 
+// The bridge's own checks of the weights, before they are sent: exit 2 with the reason.
+void check_weights(const Options& o) {
+  std::vector<const char*> names;
+  std::vector<double> values;
+  for (const auto& [name, value] : o.weights) {
+    names.push_back(name.c_str());
+    values.push_back(value);
+  }
+  dds::msg::CostWeights w{};
+  w.names = dds::borrow(names.data(), names.size());
+  w.values = dds::borrow(values.data(), values.size());
+  const auto& limits = dds::forearm_weight_limits();
+  const dds::Verdict v = dds::validate(w, limits.data(), limits.size(), 0, {});
+  if (!v.ok) throw ArgumentError{"invalid weights: " + v.detail};
+}
+
+int send_weights(const Options& o, const std::string& config) {
+  dds::ForearmDdsClient client(o.domain, static_cast<proto::NodeId>(o.node), config);
+  if (!client.wait_for_bridge(o.timeout_s)) {
+    std::fprintf(stderr,
+                 "hmpc-forearm-cli: no forearm bridge subscribed to %s/cost_weights on domain %u "
+                 "within %g s\n",
+                 dds::default_namespace(static_cast<proto::NodeId>(o.node)).c_str(), o.domain,
+                 o.timeout_s);
+    return 1;
+  }
+  if (!client.send(o.weights) || !deliver(client, o)) return 1;
+  std::printf("sent %zu cost weights to node %d\n", o.weights.size(), o.node);
+  return 0;
+}
+
 int watch(const Options& o, const std::string& config) {
   dds::ForearmDdsClient client(o.domain, static_cast<proto::NodeId>(o.node), config);
   long printed = 0;
@@ -365,7 +413,9 @@ int main(int argc, char** argv) {
   std::vector<hmpc::host::TrajectoryPoint> target;
   try {
     options = parse(argc, argv);
-    if (options.command != "watch") {
+    if (options.command == "weights") {
+      check_weights(options);
+    } else if (options.command != "watch") {
       command = command_of(options);
       target = target_of(options);
       check_target(target);
@@ -381,8 +431,9 @@ int main(int argc, char** argv) {
   sigaction(SIGTERM, &action, nullptr);
   const std::string config = options.loopback ? dds::loopback_config() : std::string();
   try {
-    return options.command == "watch" ? watch(options, config)
-                                      : send(options, command, target, config);
+    if (options.command == "watch") return watch(options, config);
+    if (options.command == "weights") return send_weights(options, config);
+    return send(options, command, target, config);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hmpc-forearm-cli: %s\n", e.what());
     return 1;

@@ -6,6 +6,7 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include "hmpc/dds/endpoint.hpp"
@@ -34,8 +35,8 @@ const char* strategy_name(proto::Strategy s) {
 struct Topics {
   explicit Topics(const std::string& ns)
       : joint_states(ns + "/joint_states"), telemetry(ns + "/telemetry"), command(ns + "/command"),
-        joint_trajectory(ns + "/joint_trajectory") {}
-  std::string joint_states, telemetry, command, joint_trajectory;
+        joint_trajectory(ns + "/joint_trajectory"), cost_weights(ns + "/cost_weights") {}
+  std::string joint_states, telemetry, command, joint_trajectory, cost_weights;
   std::string diagnostics = "/diagnostics";
 };
 
@@ -76,6 +77,21 @@ std::string default_namespace(proto::NodeId node) {
   return "/hmpc/forearm_" + std::to_string(unsigned{node});
 }
 
+const std::array<WeightLimits, 4>& forearm_weight_limits() {
+  static const std::array<WeightLimits, 4> limits = [] {
+    std::array<WeightLimits, 4> l{};
+    const proto::Signal signals[] = {
+        proto::Signal::kCostWeightsTheta, proto::Signal::kCostWeightsPressure,
+        proto::Signal::kCostWeightsTorque, proto::Signal::kCostWeightsValve};
+    for (std::size_t i = 0; i < l.size(); ++i) {
+      const auto& spec = protocol::signal_spec(signals[i]);
+      l[i] = {spec.name, spec.factor, spec.max};
+    }
+    return l;
+  }();
+  return limits;
+}
+
 const JointLimits& forearm_joint_limits() {
   static const JointLimits limits = [] {
     const forearm::Parameters<double> arm{};
@@ -95,6 +111,7 @@ struct ForearmDdsBridge::Impl {
         diagnostics(participant, topics.diagnostics, Qos::state()),
         commands(participant, topics.command, Qos::command(kCommandDeadlineS)),
         trajectories(participant, topics.joint_trajectory, Qos::state()),
+        weights(participant, topics.cost_weights, Qos::state()),
         hardware_id("forearm board node " + std::to_string(unsigned{node_id})),
         diagnostic_name(ns.substr(1) + "/board") {
     points.reserve(kMaxTrajectoryPoints);
@@ -145,14 +162,15 @@ struct ForearmDdsBridge::Impl {
   Writer<msg::DiagnosticArray> diagnostics;
   Reader<msg::ModeCommand> commands;
   Reader<msg::JointTrajectory> trajectories;
+  Reader<msg::CostWeights> weights;
   std::string hardware_id, diagnostic_name;
   std::vector<host::TrajectoryPoint> points;
   RejectCounters rejects;
   DiagnosticsText last_diagnostics;
   double next_diagnostics_s = 0;
   std::uint32_t deadline_misses = 0;
-  std::uint32_t alive_commanders = 0;
-  bool commanded = false;  // a command came since the last silence
+  dds_instance_handle_t commander = 0;  // the writer of the last accepted command
+  bool commanded = false;               // a command came since the last silence
   std::uint64_t silences = 0;
 };
 
@@ -211,12 +229,13 @@ void ForearmDdsBridge::poll(const ForearmDdsHandlers& handlers) {
   Impl& d = *impl_;
   const double now = unix_time_s();
   const StampPolicy stamps;
-  d.commands.take([&](const msg::ModeCommand& c) {
+  d.commands.take([&](const msg::ModeCommand& c, const dds_sample_info_t& info) {
     const Verdict v = validate(c, strategy_names().data(), kStrategyCount, now, stamps);
     if (!v.ok) return d.reject("ModeCommand", v);
     std::uint32_t strategy = 0;
     proto::value_of(proto::kStrategyValues, c.strategy, strategy);
     d.commanded = true;
+    d.commander = info.publication_handle;
     if (handlers.command) {
       handlers.command({c.sequence_number, static_cast<proto::RequestedMode>(c.mode),
                         static_cast<proto::Strategy>(strategy), c.clear_faults});
@@ -241,13 +260,27 @@ void ForearmDdsBridge::poll(const ForearmDdsHandlers& handlers) {
       if (!v.ok) d.reject("JointTrajectory", v);
     }
   });
-  // A silent commander: a deadline passed without a command, or the commanders' liveliness
-  // lapsed (a process that died, or deleted its writer).
+  d.weights.take([&](const msg::CostWeights& w) {
+    const auto& limits = forearm_weight_limits();
+    const Verdict v = validate(w, limits.data(), limits.size(), now, stamps);
+    if (!v.ok) return d.reject("CostWeights", v);
+    proto::CostWeights out{};
+    float* fields[] = {&out.w_theta, &out.w_p, &out.w_tau, &out.w_v};
+    for (std::uint32_t i = 0; i < w.names._length; ++i) {
+      for (std::size_t k = 0; k < limits.size(); ++k) {
+        if (std::strcmp(w.names._buffer[i], limits[k].name) == 0) {
+          *fields[k] = static_cast<float>(w.values._buffer[i]);
+        }
+      }
+    }
+    if (handlers.weights) handlers.weights(out);
+  });
+  // A silent commander: a deadline passed without a command (a process that hangs, or whose
+  // liveliness lapsed), or the writer of the last command left (a process that ended or died;
+  // other writers, e.g. a second operator's, come and go without effect).
   const std::uint32_t misses = d.commands.deadline_misses();
-  const std::uint32_t alive = d.commands.alive_writers();
-  const bool silent = misses > d.deadline_misses || alive < d.alive_commanders;
+  const bool silent = misses > d.deadline_misses || !d.commands.matched(d.commander);
   d.deadline_misses = misses;
-  d.alive_commanders = alive;
   if (silent && d.commanded) {
     d.commanded = false;
     ++d.silences;
@@ -268,6 +301,7 @@ struct ForearmDdsClient::Impl {
       : topics(ns), participant(domain_id, config),
         commands(participant, topics.command, Qos::command(kCommandDeadlineS)),
         trajectories(participant, topics.joint_trajectory, Qos::state()),
+        weights(participant, topics.cost_weights, Qos::state()),
         joint_states(participant, topics.joint_states, Qos::state()),
         telemetry(participant, topics.telemetry, Qos::state()),
         diagnostics(participant, topics.diagnostics, Qos::state()),
@@ -283,6 +317,7 @@ struct ForearmDdsClient::Impl {
   Participant participant;
   Writer<msg::ModeCommand> commands;
   Writer<msg::JointTrajectory> trajectories;
+  Writer<msg::CostWeights> weights;
   Reader<msg::JointState> joint_states;
   Reader<msg::ForearmTelemetry> telemetry;
   Reader<msg::DiagnosticArray> diagnostics;
@@ -298,8 +333,9 @@ ForearmDdsClient::~ForearmDdsClient() = default;
 
 bool ForearmDdsClient::wait_for_bridge(double timeout_s) {
   const dds_time_t end = dds_time() + to_duration(timeout_s);
+  const auto left = [&] { return double(end - dds_time()) * 1e-9; };
   return impl_->commands.wait_for_reader(timeout_s) &&
-         impl_->trajectories.wait_for_reader(double(end - dds_time()) * 1e-9);
+         impl_->trajectories.wait_for_reader(left()) && impl_->weights.wait_for_reader(left());
 }
 
 bool ForearmDdsClient::send(const ModeCommandSample& command) {
@@ -328,8 +364,24 @@ bool ForearmDdsClient::send(const std::vector<host::TrajectoryPoint>& points) {
   return impl_->trajectories.write(t);
 }
 
+bool ForearmDdsClient::send(const std::vector<std::pair<std::string, double>>& weights) {
+  std::vector<const char*> names;
+  std::vector<double> values;
+  for (const auto& [name, value] : weights) {
+    names.push_back(name.c_str());
+    values.push_back(value);
+  }
+  msg::CostWeights w{};
+  w.header.stamp = from_seconds<msg::Time>(unix_time_s());
+  w.header.frame_id = borrow("");
+  w.names = borrow(names.data(), names.size());
+  w.values = borrow(values.data(), values.size());
+  return impl_->weights.write(w);
+}
+
 bool ForearmDdsClient::wait_for_delivery(double timeout_s) {
-  return impl_->commands.wait_for_acks(timeout_s) && impl_->trajectories.wait_for_acks(timeout_s);
+  return impl_->commands.wait_for_acks(timeout_s) && impl_->trajectories.wait_for_acks(timeout_s) &&
+         impl_->weights.wait_for_acks(timeout_s);
 }
 
 bool ForearmDdsClient::wait_for_data(double timeout_s) {

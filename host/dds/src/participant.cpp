@@ -134,8 +134,7 @@ dds_duration_t to_duration(double seconds) {
 }
 
 double unix_time_s() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
 std::string dds_topic_name(const std::string& ros_name) {

@@ -77,9 +77,9 @@ Verdict check_names(const char* field, const dds_sequence_string& names, const c
 Verdict check_length(const char* field, std::uint32_t point, const dds_sequence_double& values,
                      std::size_t joints, bool required) {
   if ((values._length == 0 && !required) || values._length == joints) return Verdict::accept();
-  return Verdict::reject(Rejection::kLengthMismatch,
-                         format("points[%u].%s has %u values for %zu joints", point, field,
-                                values._length, joints));
+  return Verdict::reject(
+      Rejection::kLengthMismatch,
+      format("points[%u].%s has %u values for %zu joints", point, field, values._length, joints));
 }
 
 }  // namespace
@@ -139,9 +139,9 @@ Verdict validate(const msg::JointTrajectory& trajectory, const JointLimits* join
   constexpr std::size_t kMaxJoints = 32;
   const std::size_t n = trajectory.joint_names._length;
   if (n != joint_count || n > kMaxJoints) {
-    return Verdict::reject(Rejection::kLengthMismatch,
-                           format("joint_names has %zu names; this robot has %zu joints", n,
-                                  joint_count));
+    return Verdict::reject(
+        Rejection::kLengthMismatch,
+        format("joint_names has %zu names; this robot has %zu joints", n, joint_count));
   }
   const char* known[kMaxJoints];
   for (std::size_t j = 0; j < joint_count; ++j) known[j] = joints[j].name;
@@ -166,31 +166,28 @@ Verdict validate(const msg::JointTrajectory& trajectory, const JointLimits* join
     const double time = to_seconds(p.time_from_start);
     if (time < 0 || time > limits.max_duration_s) {
       return Verdict::reject(Rejection::kOutOfRange,
-                             format("points[%u].time_from_start = %g s is outside 0..%g s", k,
-                                    time, limits.max_duration_s));
+                             format("points[%u].time_from_start = %g s is outside 0..%g s", k, time,
+                                    limits.max_duration_s));
     }
     if (!(time > previous_time)) {
-      return Verdict::reject(Rejection::kNotIncreasing,
-                             format("points[%u].time_from_start = %g s does not follow %g s", k,
-                                    time, previous_time));
+      return Verdict::reject(
+          Rejection::kNotIncreasing,
+          format("points[%u].time_from_start = %g s does not follow %g s", k, time, previous_time));
     }
     previous_time = time;
     for (const Verdict& check :
          {check_length("positions", k, p.positions, n, true),
           check_length("velocities", k, p.velocities, n, false),
           check_length("accelerations", k, p.accelerations, n, false),
-          check_length("effort", k, p.effort, n, false),
-          check_finite("positions", k, p.positions),
+          check_length("effort", k, p.effort, n, false), check_finite("positions", k, p.positions),
           check_finite("velocities", k, p.velocities),
-          check_finite("accelerations", k, p.accelerations),
-          check_finite("effort", k, p.effort)}) {
+          check_finite("accelerations", k, p.accelerations), check_finite("effort", k, p.effort)}) {
       if (!check.ok) return check;
     }
     for (std::size_t i = 0; i < n; ++i) {
       const JointLimits& joint = joints[index[i]];
-      v = check_value(p.positions._buffer[i], joint.min_position, joint.max_position, [&] {
-        return format("points[%u].positions[%zu] (%s)", k, i, joint.name);
-      });
+      v = check_value(p.positions._buffer[i], joint.min_position, joint.max_position,
+                      [&] { return format("points[%u].positions[%zu] (%s)", k, i, joint.name); });
       if (!v.ok) return v;
       if (p.velocities._length > 0 && std::abs(p.velocities._buffer[i]) > joint.max_speed) {
         return Verdict::reject(Rejection::kRateLimit,
@@ -223,8 +220,7 @@ Verdict validate(const msg::JointTrajectory& trajectory, const JointLimits* join
                                format("between points[%u] and [%u], %s swings to %g..%g rad, "
                                       "outside %g..%g rad",
                                       k - 1, k, joint.name, bounds.min_position,
-                                      bounds.max_position, joint.min_position,
-                                      joint.max_position));
+                                      bounds.max_position, joint.min_position, joint.max_position));
       }
     }
   }
@@ -237,16 +233,17 @@ Verdict validate(const msg::ModeCommand& command, const char* const* strategies,
   if (!v.ok) return v;
   if (command.mode < static_cast<std::uint8_t>(CommandMode::kIdle) ||
       command.mode > static_cast<std::uint8_t>(CommandMode::kRun)) {
-    return Verdict::reject(Rejection::kUnknownValue,
-                           format("mode %u is not idle (1), hold (2) or run (3)",
-                                  unsigned{command.mode}));
+    return Verdict::reject(
+        Rejection::kUnknownValue,
+        format("mode %u is not idle (1), hold (2) or run (3)", unsigned{command.mode}));
   }
   const char* strategy = command.strategy;
   for (std::size_t i = 0; i < strategy_count && strategy; ++i) {
     if (std::strcmp(strategy, strategies[i]) == 0) return Verdict::accept();
   }
   std::string expected;
-  for (std::size_t i = 0; i < strategy_count; ++i) expected += (i ? ", " : "") + text_of(strategies[i]);
+  for (std::size_t i = 0; i < strategy_count; ++i)
+    expected += (i ? ", " : "") + text_of(strategies[i]);
   return Verdict::reject(Rejection::kUnknownValue,
                          "strategy '" + text_of(strategy) + "' is not one of: " + expected);
 }
@@ -263,7 +260,8 @@ Verdict validate(const msg::CostWeights& weights, const WeightLimits* known,
   }
   if (n == 0) return Verdict::reject(Rejection::kLengthMismatch, "no weights");
   if (n > kMaxWeights || known_count > kMaxWeights) {
-    return Verdict::reject(Rejection::kTooLarge, format("%zu weights, at most %zu", n, kMaxWeights));
+    return Verdict::reject(Rejection::kTooLarge,
+                           format("%zu weights, at most %zu", n, kMaxWeights));
   }
   const char* names[kMaxWeights];
   for (std::size_t k = 0; k < known_count; ++k) names[k] = known[k].name;

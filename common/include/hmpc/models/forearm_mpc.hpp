@@ -107,6 +107,19 @@ void set_time(TwoLayerMpc<Upper, Nu, Fast, Nf, Layer>& mpc, typename Upper::Scal
   mpc.fast_subsystem().set_start_time(t);
 }
 
+// Gives every problem of an MPC the tracking-cost weights (Eq. 3.3), e.g. between two steps.
+template <class Problem, int N>
+void set_weights(RecedingHorizonMpc<Problem, N>& mpc,
+                 const CostWeights<typename Problem::Scalar>& w) {
+  mpc.problem().set_weights(w);
+}
+template <class Upper, int Nu, class Fast, int Nf, class Layer>
+void set_weights(TwoLayerMpc<Upper, Nu, Fast, Nf, Layer>& mpc,
+                 const CostWeights<typename Upper::Scalar>& w) {
+  mpc.upper_problem().set_weights(w);
+  mpc.fast_subsystem().set_weights(w);
+}
+
 // Compute time of the forearm strategies on the STM32H743 board (Cortex-M7 at the 400 MHz our
 // board image runs at, firmware/boards/stm32h7; 480 MHz parts run 1.2x faster), double FPU:
 // instructions per unit of solver work, a least-squares fit (R^2 0.9997 over 1500 updates of

@@ -191,6 +191,7 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
   void set_start_time(Scalar t) { start_time_ = t; }
   void set_target(const TargetTrajectory<Scalar>* target) { target_ = target; }
   void set_weights(const CostWeights<Scalar>& w) { w_ = w; }
+  const CostWeights<Scalar>& weights() const { return w_; }
 
   void set_reference(int j, const FullState& x_hat, const FullControl& u_hat) {
     theta_hat_[j] = x_hat(0);

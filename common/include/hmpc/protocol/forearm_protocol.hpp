@@ -67,8 +67,9 @@ enum class FrameType : std::uint8_t {
   kSolveTelemetry,    // board -> host: MPC solve of the last control period
   kGains,             // host -> board: hold-mode PID gains
   kSync,              // plant (HIL simulator) -> board: lock-step clock tick
+  kCostWeights,       // host -> board: the MPC's tracking-cost weights (Eq. 3.3)
 };
-inline constexpr std::size_t kFrameTypeCount = 10;
+inline constexpr std::size_t kFrameTypeCount = 11;
 
 using FrameSpec = protocol::FrameSpec<FrameType>;
 
@@ -85,6 +86,7 @@ inline constexpr FrameSpec kFrames[kFrameTypeCount] = {
   {FrameType::kSolveTelemetry,   "SolveTelemetry",   0x7, 8, Endpoint::kBoard, Endpoint::kHost,    4, false},
   {FrameType::kGains,            "Gains",            0x8, 8, Endpoint::kHost,  Endpoint::kBoard,   0, false},
   {FrameType::kSync,             "Sync",             0x9, 8, Endpoint::kPlant, Endpoint::kBoard,   1, false},
+  {FrameType::kCostWeights,      "CostWeights",      0xA, 8, Endpoint::kHost,  Endpoint::kBoard,   0, false},
 };
 // clang-format on
 
@@ -163,9 +165,11 @@ enum class Signal : std::uint8_t {
   kSolveTelemetryTrackingError,
   kGainsChecksum, kGainsCounter, kGainsKp, kGainsKi, kGainsKd, kGainsLoadVelocity,
   kSyncChecksum, kSyncCounter, kSyncTick,
+  kCostWeightsChecksum, kCostWeightsCounter, kCostWeightsTheta, kCostWeightsPressure,
+  kCostWeightsTorque, kCostWeightsValve,
 };
 // clang-format on
-inline constexpr std::size_t kSignalCount = 55;
+inline constexpr std::size_t kSignalCount = 61;
 
 using SignalSpec = protocol::SignalSpec<Signal, FrameType>;
 
@@ -243,6 +247,13 @@ inline constexpr SignalSpec kSignals[kSignalCount] = {
   {Signal::kSyncChecksum,                    FrameType::kSync,             "checksum",          0,  8, ByteOrder::kLittleEndian, false, 1,       0, 0,       255,        "",          SignalKind::kChecksum,    {}},
   {Signal::kSyncCounter,                     FrameType::kSync,             "counter",           8,  4, ByteOrder::kLittleEndian, false, 1,       0, 0,       15,         "",          SignalKind::kCounter,     {}},
   {Signal::kSyncTick,                        FrameType::kSync,             "tick",             32, 32, ByteOrder::kLittleEndian, false, 1,       0, 0,       4294967295, "ms",        SignalKind::kInteger,     {}},
+
+  {Signal::kCostWeightsChecksum,             FrameType::kCostWeights,      "checksum",          0,  8, ByteOrder::kLittleEndian, false, 1,       0, 0,       255,        "",          SignalKind::kChecksum,    {}},
+  {Signal::kCostWeightsCounter,              FrameType::kCostWeights,      "counter",           8,  4, ByteOrder::kLittleEndian, false, 1,       0, 0,       15,         "",          SignalKind::kCounter,     {}},
+  {Signal::kCostWeightsTheta,                FrameType::kCostWeights,      "w_theta",          12, 13, ByteOrder::kLittleEndian, false, 0.05,    0, 0,       400,        "",          SignalKind::kPhysical,    {}},
+  {Signal::kCostWeightsPressure,             FrameType::kCostWeights,      "w_p",              25, 13, ByteOrder::kLittleEndian, false, 0.05,    0, 0,       400,        "",          SignalKind::kPhysical,    {}},
+  {Signal::kCostWeightsTorque,               FrameType::kCostWeights,      "w_tau",            38, 13, ByteOrder::kLittleEndian, false, 0.0005,  0, 0,       4,          "",          SignalKind::kPhysical,    {}},
+  {Signal::kCostWeightsValve,                FrameType::kCostWeights,      "w_v",              51, 13, ByteOrder::kLittleEndian, false, 0.000005,0, 0,       0.04,       "",          SignalKind::kPhysical,    {}},
 };
 // clang-format on
 
@@ -418,6 +429,27 @@ struct Sync {
   }
 };
 
+// The weights of the tracking cost, Eq. 3.3 (forearm::CostWeights), set while the board runs
+// and adopted before its next MPC step. 0 keeps a weight as it is, so that a host can change
+// one without knowing the others (the board may have been started with its own). Ranges: 10x
+// the thesis's values (Sec. 3.3) and down to the resolution, 0.25 % of them or finer.
+struct CostWeights {
+  static constexpr FrameType kType = FrameType::kCostWeights;
+  float w_theta = 0;  // tracking
+  float w_p = 0;      // pressure above the threshold P0
+  float w_tau = 0;    // motor torque
+  float w_v = 0;      // valve voltage
+  std::uint8_t counter = 0;
+  template <class Self, class Visitor>
+  static constexpr void visit(Self& self, Visitor&& visitor) {
+    visitor(Signal::kCostWeightsCounter, self.counter);
+    visitor(Signal::kCostWeightsTheta, self.w_theta);
+    visitor(Signal::kCostWeightsPressure, self.w_p);
+    visitor(Signal::kCostWeightsTorque, self.w_tau);
+    visitor(Signal::kCostWeightsValve, self.w_v);
+  }
+};
+
 // ---------------------------------------------------------------------------------------
 // The description the codec reads, and the codec over it
 
@@ -433,7 +465,7 @@ constexpr Description protocol_of(Signal) { return {}; }
 
 using Messages =
     protocol::MessageList<ModeCommand, SensorSample, ActuatorCommand, TrajectorySample, BoardStatus,
-                          JointState, ActuatorOutputs, SolveTelemetry, Gains, Sync>;
+                          JointState, ActuatorOutputs, SolveTelemetry, Gains, Sync, CostWeights>;
 static_assert(protocol::is_well_formed<Description>(Messages{}),
               "tables or messages break a rule of codec.hpp (see its compile-time checks)");
 

@@ -3,7 +3,8 @@
 // ahead of the board's MPC horizon) and what the board last reported. The host program
 // (host/apps/hmpc_forearm_host.cpp) moves its frames on SocketCAN and bridges to DDS.
 //
-// Everything goes out on heartbeat ticks, every 10 ms: samples first, then the ModeCommand.
+// Everything goes out on heartbeat ticks, every 10 ms: samples first, then new cost weights,
+// then the ModeCommand.
 // In HIL lock-step, where the plant waits for the heartbeat, the board therefore sees each
 // tick's host frames before its next tick, whatever the scheduling of the processes.
 #pragma once
@@ -71,6 +72,12 @@ class ForearmCanMaster {
     start_streaming(streaming_ ? std::max(next_sample_s_, now_s) : now_s);
     return true;
   }
+  // Tracking-cost weights (0 keeps the board's), sent once on the next heartbeat tick; the
+  // board adopts them before its next MPC step.
+  void send_cost_weights(const proto::CostWeights& weights) {
+    weights_ = weights;
+    weights_pending_ = true;
+  }
   void stop_streaming() { streaming_ = false; }
   bool streaming() const { return streaming_; }
   double target_angle(double t) const {
@@ -88,6 +95,10 @@ class ForearmCanMaster {
       send(proto::TrajectorySample{float(target_angle(next_sample_s_)),
                                    to_host_time_us(next_sample_s_), 0});
       next_sample_s_ += config_.sample_period_s;
+    }
+    if (weights_pending_) {
+      send(weights_);
+      weights_pending_ = false;
     }
     if (!heartbeat_enabled) return;
     send(proto::ModeCommand{mode_, strategy_, clear_faults_, to_host_time_us(now_s), 0});
@@ -149,6 +160,8 @@ class ForearmCanMaster {
   proto::RequestedMode mode_ = proto::RequestedMode::kIdle;
   proto::Strategy strategy_ = proto::Strategy::kTwoStage;
   bool clear_faults_ = false;
+  proto::CostWeights weights_{};
+  bool weights_pending_ = false;
   BoardReport report_;
 };
 

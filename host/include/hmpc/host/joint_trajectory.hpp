@@ -98,9 +98,9 @@ class JointTrajectoryTarget {
     if (points_.empty()) return 0;
     if (t <= points_.front().time_s) return points_.front().position;
     if (t >= points_.back().time_s) return points_.back().position;
-    const auto after = std::upper_bound(
-        points_.begin(), points_.end(), t,
-        [](double time, const TrajectoryPoint& p) { return time < p.time_s; });
+    const auto after =
+        std::upper_bound(points_.begin(), points_.end(), t,
+                         [](double time, const TrajectoryPoint& p) { return time < p.time_s; });
     const TrajectoryPoint& b = *after;
     const TrajectoryPoint& a = *(after - 1);
     return SegmentCubic(a, b).position((t - a.time_s) / (b.time_s - a.time_s));

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 
 #include "hmpc/dds/messages.hpp"
 #include "hmpc/dds/participant.hpp"
@@ -21,7 +22,9 @@ class Writer {
         handle_(participant.writer(participant.topic(descriptor<Message>(), ros_name), qos)) {}
 
   // False if DDS refused the sample.
-  bool write(const Message& message) const { return dds_write(handle_, &message) == DDS_RETCODE_OK; }
+  bool write(const Message& message) const {
+    return dds_write(handle_, &message) == DDS_RETCODE_OK;
+  }
 
   // Readers matched so far (discovered, QoS compatible).
   std::uint32_t matched_readers() const {
@@ -64,9 +67,10 @@ class Reader {
     checked(dds_waitset_attach(waitset_, condition, 0), "a DDS waitset attachment");
   }
 
-  // Takes every pending sample, calling visit(const Message&) on each that carries data (the
-  // others announce a writer's departure), in arrival order. The message lives in memory DDS
-  // lends until visit returns. Returns how many were visited.
+  // Takes every pending sample, calling visit(const Message&) or, if it takes them,
+  // visit(const Message&, const dds_sample_info_t&) on each that carries data (the others
+  // announce a writer's departure), in arrival order. The message lives in memory DDS lends
+  // until visit returns. Returns how many were visited.
   template <class Visit>
   std::size_t take(Visit&& visit) const {
     std::size_t visited = 0;
@@ -79,7 +83,12 @@ class Reader {
       for (dds_return_t i = 0; i < n; ++i) {
         if (!loan.infos[i].valid_data) continue;
         ++visited;
-        visit(*static_cast<const Message*>(loan.buffers[i]));
+        const auto& message = *static_cast<const Message*>(loan.buffers[i]);
+        if constexpr (std::is_invocable_v<Visit, const Message&, const dds_sample_info_t&>) {
+          visit(message, loan.infos[i]);
+        } else {
+          visit(message);
+        }
       }
       if (static_cast<std::size_t>(n) < kBatch) return visited;
     }
@@ -97,12 +106,16 @@ class Reader {
                ? status.total_count
                : 0;
   }
-  // Matched writers whose liveliness holds.
-  std::uint32_t alive_writers() const {
-    dds_liveliness_changed_status_t status{};
-    return dds_get_liveliness_changed_status(handle_, &status) == DDS_RETCODE_OK
-               ? status.alive_count
-               : 0;
+  // Whether this writer (a sample's publication_handle) is still matched: false once it was
+  // deleted or its participant left.
+  bool matched(dds_instance_handle_t writer) const {
+    constexpr std::size_t kMost = 64;
+    std::array<dds_instance_handle_t, kMost> writers{};
+    const dds_return_t n = dds_get_matched_publications(handle_, writers.data(), kMost);
+    for (dds_return_t i = 0; i < n && i < dds_return_t(kMost); ++i) {
+      if (writers[std::size_t(i)] == writer) return true;
+    }
+    return false;
   }
   std::uint32_t matched_writers() const {
     dds_subscription_matched_status_t status{};

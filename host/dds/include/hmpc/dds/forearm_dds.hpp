@@ -8,15 +8,18 @@
 //   /diagnostics           diagnostic_msgs/DiagnosticArray  state QoS    bridge -> operators
 //   <ns>/command           hmpc_msgs/ModeCommand            command QoS  operators -> bridge
 //   <ns>/joint_trajectory  trajectory_msgs/JointTrajectory  state QoS    operators -> bridge
+//   <ns>/cost_weights      hmpc_msgs/CostWeights            state QoS    operators -> bridge
 // (QoS profiles: hmpc/dds/participant.hpp.) The joint is named kJointName; strategies by the
 // CAN protocol's names (forearm_protocol's kStrategyValues: fine_4ms, ..., two_stage, pam_only).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hmpc/dds/participant.hpp"
@@ -71,6 +74,10 @@ struct ForearmTelemetrySample {
   double tau_m = 0;
 };
 
+// The weights a CostWeights message may set, by the CAN frame's signal names (w_theta, w_p,
+// w_tau, w_v: Eq. 3.3), each from its smallest non-zero value to its maximum on the bus.
+const std::array<WeightLimits, 4>& forearm_weight_limits();
+
 // What the host knows of its board after each SolveTelemetry.
 struct ForearmStateSample {
   double theta = 0;      // rad
@@ -103,6 +110,8 @@ struct ForearmDdsHandlers {
   std::function<void(const ModeCommandSample&)> command;
   std::function<Verdict(const TrajectoryView&)> trajectory;
   std::function<void()> commander_silent;  // the commander stopped within kCommandDeadlineS
+  // The weights given, the others 0 (the board keeps those).
+  std::function<void(const proto::CostWeights&)> weights;
 };
 
 // The host controller's side. Every constructor here takes `config`, Cyclone DDS configuration
@@ -161,6 +170,8 @@ class ForearmDdsClient {
   bool send(const ModeCommandSample& command);
   // Points of the joint, starting on receipt. False if DDS refused the sample.
   bool send(const std::vector<host::TrajectoryPoint>& points);
+  // Named cost weights. False if DDS refused the sample.
+  bool send(const std::vector<std::pair<std::string, double>>& weights);
   // Waits until every matched bridge acknowledged what was sent; false on timeout.
   bool wait_for_delivery(double timeout_s);
 

@@ -51,10 +51,10 @@ enum class CommandMode : std::uint8_t { kIdle = 1, kHold = 2, kRun = 3 };
 template <class Message>
 const dds_topic_descriptor_t& descriptor();
 
-#define HMPC_DDS_DESCRIPTOR(Message, generated)                                  \
-  template <>                                                                    \
-  inline const dds_topic_descriptor_t& descriptor<Message>() {                   \
-    return generated;                                                            \
+#define HMPC_DDS_DESCRIPTOR(Message, generated)                \
+  template <>                                                  \
+  inline const dds_topic_descriptor_t& descriptor<Message>() { \
+    return generated;                                          \
   }
 HMPC_DDS_DESCRIPTOR(msg::JointState, sensor_msgs_msg_dds__JointState__desc)
 HMPC_DDS_DESCRIPTOR(msg::Imu, sensor_msgs_msg_dds__Imu__desc)

@@ -63,7 +63,7 @@ struct JointLimits {
   const char* name;
   double min_position;  // rad
   double max_position;
-  double max_speed;     // rad/s: between points, of given velocities, and of the interpolant
+  double max_speed;  // rad/s: between points, of given velocities, and of the interpolant
 };
 
 struct TrajectoryLimits {
