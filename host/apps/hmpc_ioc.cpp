@@ -1,7 +1,8 @@
 // hmpc-ioc: inverse optimal control for the humanoid (thesis Ch. 4).
 //   demos     demonstrations: by the robot's own Coarse MPC under a motion's weights, or by
 //             the human demonstrator through retargeting (Sec. 4.2.1)
-//   learn     demonstrations -> the 13 weights of Eq. 4.31 (local IOC, Sec. 4.2.2)
+//   learn     demonstrations -> the 13 weights of Eq. 4.31 (local IOC, Sec. 4.2.2), written to a
+//             file and, with --publish-domain, published over DDS to the humanoid controller
 //   generate  a motion with learned weights through the Coarse-Fast MPC (Sec. 4.2.3)
 //   compare   generation with the initial and the learned weights against the targets
 //             (Figs. 4.3-4.5)
@@ -12,9 +13,12 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hmpc/cli/arguments.hpp"
+#include "hmpc/dds/cost_weights.hpp"
+#include "hmpc/dds/participant.hpp"
 #include "hmpc/humanoid/physical_checks.hpp"
 #include "hmpc/humanoid/viewing.hpp"
 #include "hmpc/ioc/demonstrations.hpp"
@@ -53,6 +57,7 @@ void usage(std::FILE* out) {
       "      MPC (the motion gives the tracking weights); writes the demonstrations and, to\n"
       "      --reference, the demonstrated behaviour as a motion file for learn/generate/compare\n"
       "  hmpc-ioc learn --motion NAME|FILE --demos FILE --out FILE [--iterations N] [--threads T]\n"
+      "      [--publish-domain D [--dds-loopback] [--publish-timeout S]]\n"
       "      learns the 13 weights of Eq. 4.31 (N: L-BFGS iterations, 1..1000, default 200);\n"
       "      the motion gives the targets and the weights that are not learned\n"
       "  hmpc-ioc generate --motion NAME|FILE --weights FILE [--out DIR] [--mpc KIND]\n"
@@ -129,8 +134,16 @@ int demos(const humanoid::Motion& motion, int count, bool plans,
   return 0;
 }
 
+// Where learn publishes its weights over DDS (CostWeights on kHumanoidCostWeightsTopic, for
+// the humanoid's controller); domain < 0: it does not.
+struct Publish {
+  long domain = -1;
+  bool loopback = false;
+  double timeout_s = 10;
+};
+
 int learn(const humanoid::Motion& motion, const std::string& demos_path, int iterations,
-          int threads, const std::string& out) {
+          int threads, const std::string& out, const Publish& publish) {
   const std::vector<Demonstration> demonstrations = load_demonstrations(demos_path);
   humanoid::ThreadPool pool(threads);
   const auto start = std::chrono::steady_clock::now();
@@ -165,6 +178,18 @@ int learn(const humanoid::Motion& motion, const std::string& demos_path, int ite
   write_weights(file, result.weights, comment.str());
   if (!file.flush()) return fail("cannot write " + out, 1);
   std::printf("wrote %s\n", out.c_str());
+  if (publish.domain < 0) return 0;
+  std::vector<std::pair<std::string, double>> named;
+  named.reserve(kWeightCount);
+  for (int k = 0; k < kWeightCount; ++k) named.emplace_back(kWeightNames[k], result.weights[k]);
+  std::string error;
+  if (!dds::publish_cost_weights(
+          std::uint32_t(publish.domain), publish.loopback ? dds::loopback_config() : std::string(),
+          dds::kHumanoidCostWeightsTopic, std::move(named), publish.timeout_s, error)) {
+    return fail("publishing the weights: " + error + " (they are in " + out + ")", 1);
+  }
+  std::printf("published the weights on %s, DDS domain %ld\n", dds::kHumanoidCostWeightsTopic,
+              publish.domain);
   return 0;
 }
 
@@ -323,6 +348,7 @@ int main(int argc, char** argv) {
   int count = 4, iterations = 200, seed = 1;
   std::string from = "plans";
   bool no_truncate = false;
+  Publish publish;
   humanoid::ClosedLoopConfig config;
   const auto required = [](const char* option, std::string& target) {
     return [option, &target](const std::string& v) {
@@ -350,6 +376,10 @@ int main(int argc, char** argv) {
   } else if (command == "learn") {
     parser.text("--demos", required("--demos", demos_path));
     parser.integer("--iterations", 1, 1000, iterations);
+    // Cyclone maps domain ids to UDP ports 7400 + 250 d + ...: 232 is the last that fits.
+    parser.integer("--publish-domain", 0, 232, publish.domain);
+    parser.flag("--dds-loopback", publish.loopback);
+    parser.number("--publish-timeout", 0.1, 3600, "seconds in 0.1..3600", publish.timeout_s);
   } else {
     parser.text("--weights", required("--weights", weights_path));
     if (command == "compare")
@@ -389,7 +419,9 @@ int main(int argc, char** argv) {
                          out, reference);
     }
     if (command == "demos") return demos(motion, count, from == "plans", config, out);
-    if (command == "learn") return learn(motion, demos_path, iterations, config.threads, out);
+    if (command == "learn") {
+      return learn(motion, demos_path, iterations, config.threads, out, publish);
+    }
     if (command == "compare")
       return compare(motion, stem_of(motion_name), weights_path, demonstrator, config, out);
     return generate(motion, stem_of(motion_name), weights_path, config, out);

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "hmpc/dds/cost_weights.hpp"
 #include "hmpc/dds/endpoint.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 
@@ -324,17 +325,10 @@ int send(const Options& o, const dds::ModeCommandSample& command,
 
 // The bridge's own checks of the weights, before they are sent: exit 2 with the reason.
 void check_weights(const Options& o) {
-  std::vector<const char*> names;
-  std::vector<double> values;
-  for (const auto& [name, value] : o.weights) {
-    names.push_back(name.c_str());
-    values.push_back(value);
-  }
-  dds::msg::CostWeights w{};
-  w.names = dds::borrow(names.data(), names.size());
-  w.values = dds::borrow(values.data(), values.size());
+  const dds::CostWeightsSample sample(o.weights);
   const auto& limits = dds::forearm_weight_limits();
-  const dds::Verdict v = dds::validate(w, limits.data(), limits.size(), 0, {});
+  const dds::Verdict v =
+      dds::validate(sample.message(), limits.data(), limits.size(), dds::unix_time_s(), {});
   if (!v.ok) throw ArgumentError{"invalid weights: " + v.detail};
 }
 

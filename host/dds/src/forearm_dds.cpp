@@ -9,6 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "hmpc/dds/cost_weights.hpp"
 #include "hmpc/dds/endpoint.hpp"
 #include "hmpc/models/forearm.hpp"
 
@@ -365,18 +366,8 @@ bool ForearmDdsClient::send(const std::vector<host::TrajectoryPoint>& points) {
 }
 
 bool ForearmDdsClient::send(const std::vector<std::pair<std::string, double>>& weights) {
-  std::vector<const char*> names;
-  std::vector<double> values;
-  for (const auto& [name, value] : weights) {
-    names.push_back(name.c_str());
-    values.push_back(value);
-  }
-  msg::CostWeights w{};
-  w.header.stamp = from_seconds<msg::Time>(unix_time_s());
-  w.header.frame_id = borrow("");
-  w.names = borrow(names.data(), names.size());
-  w.values = borrow(values.data(), values.size());
-  return impl_->weights.write(w);
+  const CostWeightsSample sample(weights);
+  return impl_->weights.write(sample.message());
 }
 
 bool ForearmDdsClient::wait_for_delivery(double timeout_s) {
