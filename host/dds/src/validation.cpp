@@ -73,6 +73,20 @@ Verdict check_names(const char* field, const dds_sequence_string& names, const c
   return Verdict::accept();
 }
 
+// check_names against entries with a .name (joints, weights): at most kMaxKnown of them.
+constexpr std::size_t kMaxKnown = 64;
+template <class Known>
+Verdict check_names_of(const char* field, const dds_sequence_string& names, const Known* known,
+                       std::size_t known_count, std::size_t* index) {
+  if (known_count > kMaxKnown || names._length > kMaxKnown) {
+    return Verdict::reject(Rejection::kTooLarge,
+                           format("%s has %u names, at most %zu", field, names._length, kMaxKnown));
+  }
+  const char* known_names[kMaxKnown];
+  for (std::size_t k = 0; k < known_count; ++k) known_names[k] = known[k].name;
+  return check_names(field, names, known_names, known_count, index);
+}
+
 // Optional per-joint arrays: empty or one per joint.
 Verdict check_length(const char* field, std::uint32_t point, const dds_sequence_double& values,
                      std::size_t joints, bool required) {
@@ -136,17 +150,14 @@ Verdict validate(const msg::JointTrajectory& trajectory, const JointLimits* join
                  const StampPolicy& stamps) {
   Verdict v = check_stamp(trajectory.header.stamp, now_unix_s, stamps);
   if (!v.ok) return v;
-  constexpr std::size_t kMaxJoints = 32;
   const std::size_t n = trajectory.joint_names._length;
-  if (n != joint_count || n > kMaxJoints) {
+  if (n != joint_count) {
     return Verdict::reject(
         Rejection::kLengthMismatch,
         format("joint_names has %zu names; this robot has %zu joints", n, joint_count));
   }
-  const char* known[kMaxJoints];
-  for (std::size_t j = 0; j < joint_count; ++j) known[j] = joints[j].name;
-  std::size_t index[kMaxJoints];
-  v = check_names("joint_names", trajectory.joint_names, known, joint_count, index);
+  std::size_t index[kMaxKnown];
+  v = check_names_of("joint_names", trajectory.joint_names, joints, joint_count, index);
   if (!v.ok) return v;
 
   const std::uint32_t count = trajectory.points._length;
@@ -252,21 +263,14 @@ Verdict validate(const msg::CostWeights& weights, const WeightLimits* known,
                  std::size_t known_count, double now_unix_s, const StampPolicy& stamps) {
   Verdict v = check_stamp(weights.header.stamp, now_unix_s, stamps);
   if (!v.ok) return v;
-  constexpr std::size_t kMaxWeights = 64;
   const std::size_t n = weights.names._length;
   if (weights.values._length != n) {
     return Verdict::reject(Rejection::kLengthMismatch,
                            format("%u values for %zu names", weights.values._length, n));
   }
   if (n == 0) return Verdict::reject(Rejection::kLengthMismatch, "no weights");
-  if (n > kMaxWeights || known_count > kMaxWeights) {
-    return Verdict::reject(Rejection::kTooLarge,
-                           format("%zu weights, at most %zu", n, kMaxWeights));
-  }
-  const char* names[kMaxWeights];
-  for (std::size_t k = 0; k < known_count; ++k) names[k] = known[k].name;
-  std::size_t index[kMaxWeights];
-  v = check_names("names", weights.names, names, known_count, index);
+  std::size_t index[kMaxKnown];
+  v = check_names_of("names", weights.names, known, known_count, index);
   if (!v.ok) return v;
   for (std::size_t i = 0; i < n; ++i) {
     const WeightLimits& w = known[index[i]];
