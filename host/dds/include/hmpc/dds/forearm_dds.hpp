@@ -57,7 +57,7 @@ const JointLimits& forearm_joint_limits();
 // The board's mode and its MPC's last solve, with the actuator outputs, in SI units: what
 // hmpc_msgs/ForearmTelemetry carries.
 struct ForearmTelemetrySample {
-  double stamp_s = 0;  // Unix time
+  double stamp_s = 0;  // Unix time; the bridge stamps what it publishes with its clock
   proto::BoardMode mode = proto::BoardMode::kBoot;
   std::uint8_t faults = 0;  // proto::fault bits
   proto::Strategy strategy = proto::Strategy::kTwoStage;
