@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "hmpc/dds/cost_weights.hpp"
-#include "hmpc/dds/endpoint.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 
 namespace {
@@ -259,17 +258,8 @@ std::vector<hmpc::host::TrajectoryPoint> target_of(const Options& o) {
 // The bridge's own checks of the target, before it is sent: exit 2 with the reason.
 void check_target(const std::vector<hmpc::host::TrajectoryPoint>& points) {
   if (points.empty()) return;
-  std::vector<hmpc::dds::msg::JointTrajectoryPoint> out(points.size());
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    out[k].positions = dds::borrow(&points[k].position, 1);
-    out[k].velocities = dds::borrow(&points[k].velocity, points[k].has_velocity ? 1 : 0);
-    out[k].time_from_start = dds::from_seconds<dds::msg::Duration>(points[k].time_s);
-  }
-  const char* names[] = {dds::kJointName};
-  dds::msg::JointTrajectory t{};
-  t.joint_names = dds::borrow(names, 1);
-  t.points = dds::borrow<decltype(t.points)>(out.data(), out.size());
-  const dds::Verdict v = dds::validate(t, &dds::forearm_joint_limits(), 1,
+  const dds::TrajectorySample sample(points);
+  const dds::Verdict v = dds::validate(sample.message(), &dds::forearm_joint_limits(), 1,
                                        dds::TrajectoryLimits{dds::kMaxTrajectoryPoints}, 0, {});
   if (!v.ok) {
     throw ArgumentError{"invalid target: " + v.detail + " (--sine and --offset take degrees)"};

@@ -3,11 +3,11 @@
 #include "hmpc/dds/forearm_dds.hpp"
 
 #include <array>
-#include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
 
 #include "hmpc/dds/cost_weights.hpp"
 #include "hmpc/dds/endpoint.hpp"
@@ -47,26 +47,38 @@ std::string namespace_or_default(const std::string& ros_namespace, proto::NodeId
   return ns;
 }
 
-// The diagnostics' key/values: what changes them, and when they are due.
-struct DiagnosticsText {
-  std::array<std::string, 8> values;
+// What the diagnostics report, compared raw every publish (every 4 ms: no strings then) and
+// written out only when it changed or is due.
+struct DiagnosticsState {
+  proto::BoardMode mode;
+  std::uint8_t faults;
+  proto::Strategy strategy;
+  std::uint32_t rejected_frames, watchdog_trips, solver_failures, overruns;
+  proto::SolveStatusCode solve_status;
 
-  static DiagnosticsText of(const ForearmStateSample& s) {
-    DiagnosticsText d;
-    char faults[8];
-    std::snprintf(faults, sizeof faults, "0x%02x", unsigned{s.telemetry.faults});
-    d.values = {
-        proto::value_name(proto::kBoardModeValues, std::uint32_t(s.telemetry.mode)),
-        faults,
-        strategy_name(s.telemetry.strategy),
-        std::to_string(s.rejected_frames),
-        std::to_string(s.watchdog_trips),
-        std::to_string(s.solver_failures),
-        std::to_string(s.overruns),
-        proto::value_name(proto::kSolveStatusValues, std::uint32_t(s.telemetry.solve_status))};
-    return d;
+  static DiagnosticsState of(const ForearmStateSample& s) {
+    return {s.telemetry.mode, s.telemetry.faults, s.telemetry.strategy, s.rejected_frames,
+            s.watchdog_trips, s.solver_failures,  s.overruns,           s.telemetry.solve_status};
   }
-  bool operator==(const DiagnosticsText& o) const { return values == o.values; }
+  bool operator==(const DiagnosticsState& o) const {
+    return mode == o.mode && faults == o.faults && strategy == o.strategy &&
+           rejected_frames == o.rejected_frames && watchdog_trips == o.watchdog_trips &&
+           solver_failures == o.solver_failures && overruns == o.overruns &&
+           solve_status == o.solve_status;
+  }
+  // The values of kDiagnosticKeys, in order.
+  std::array<std::string, 8> text() const {
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02x", unsigned{faults});
+    return {proto::value_name(proto::kBoardModeValues, std::uint32_t(mode)),
+            hex,
+            strategy_name(strategy),
+            std::to_string(rejected_frames),
+            std::to_string(watchdog_trips),
+            std::to_string(solver_failures),
+            std::to_string(overruns),
+            proto::value_name(proto::kSolveStatusValues, std::uint32_t(solve_status))};
+  }
 };
 constexpr std::array<const char*, 8> kDiagnosticKeys = {
     "mode",           "faults",          "strategy", "rejected_frames",
@@ -125,21 +137,21 @@ struct ForearmDdsBridge::Impl {
   }
 
   bool publish_diagnostics(const ForearmStateSample& s, double now) {
-    DiagnosticsText text = DiagnosticsText::of(s);
-    if (now < next_diagnostics_s && text == last_diagnostics) return true;
-    last_diagnostics = text;
+    const DiagnosticsState state = DiagnosticsState::of(s);
+    if (now < next_diagnostics_s && state == last_diagnostics) return true;
+    last_diagnostics = state;
     next_diagnostics_s = now + kDiagnosticsPeriodS;
+    const std::array<std::string, 8> text = state.text();
     std::array<msg::KeyValue, kDiagnosticKeys.size()> values{};
     for (std::size_t i = 0; i < values.size(); ++i) {
       values[i].key = borrow(kDiagnosticKeys[i]);
-      values[i].value = borrow(text.values[i].c_str());
+      values[i].value = borrow(text[i].c_str());
     }
     const bool faulted = s.telemetry.mode == proto::BoardMode::kFault || s.telemetry.faults != 0;
     const std::string message =
-        faulted
-            ? "fault " + text.values[1]
-            : text.values[0] + (s.telemetry.mode == proto::BoardMode::kRun ? ", " + text.values[2]
-                                                                           : std::string());
+        faulted ? "fault " + text[1]
+                : text[0] +
+                      (s.telemetry.mode == proto::BoardMode::kRun ? ", " + text[2] : std::string());
     msg::DiagnosticStatus status{};
     status.level =
         static_cast<std::uint8_t>(faulted ? DiagnosticLevel::kError : DiagnosticLevel::kOk);
@@ -167,7 +179,7 @@ struct ForearmDdsBridge::Impl {
   std::string hardware_id, diagnostic_name;
   std::vector<host::TrajectoryPoint> points;
   RejectCounters rejects;
-  DiagnosticsText last_diagnostics;
+  DiagnosticsState last_diagnostics{};
   double next_diagnostics_s = 0;
   std::uint32_t deadline_misses = 0;
   dds_instance_handle_t commander = 0;  // the writer of the last accepted command
@@ -295,6 +307,18 @@ const RejectCounters& ForearmDdsBridge::rejects() const { return impl_->rejects;
 std::uint64_t ForearmDdsBridge::commander_silences() const { return impl_->silences; }
 const std::string& ForearmDdsBridge::ros_namespace() const { return impl_->ros_namespace; }
 
+TrajectorySample::TrajectorySample(std::vector<host::TrajectoryPoint> points)
+    : points_(std::move(points)), out_(points_.size()) {
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    out_[k].positions = borrow(&points_[k].position, 1);
+    out_[k].velocities = borrow(&points_[k].velocity, points_[k].has_velocity ? 1 : 0);
+    out_[k].time_from_start = from_seconds<msg::Duration>(points_[k].time_s);
+  }
+  message_.header.frame_id = borrow("");
+  message_.joint_names = borrow(names_, 1);
+  message_.points = borrow<decltype(message_.points)>(out_.data(), out_.size());
+}
+
 // ------------------------------------------------------------------------ client
 
 struct ForearmDdsClient::Impl {
@@ -351,18 +375,8 @@ bool ForearmDdsClient::send(const ModeCommandSample& command) {
 }
 
 bool ForearmDdsClient::send(const std::vector<host::TrajectoryPoint>& points) {
-  std::vector<msg::JointTrajectoryPoint> out(points.size());
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    out[k].positions = borrow(&points[k].position, 1);
-    out[k].velocities = borrow(&points[k].velocity, points[k].has_velocity ? 1 : 0);
-    out[k].time_from_start = from_seconds<msg::Duration>(points[k].time_s);
-  }
-  const char* names[] = {kJointName};
-  msg::JointTrajectory t{};
-  t.header.frame_id = borrow("");
-  t.joint_names = borrow(names, 1);
-  t.points = borrow<decltype(t.points)>(out.data(), out.size());
-  return impl_->trajectories.write(t);
+  const TrajectorySample sample(points);
+  return impl_->trajectories.write(sample.message());
 }
 
 bool ForearmDdsClient::send(const std::vector<std::pair<std::string, double>>& weights) {

@@ -143,6 +143,22 @@ class ForearmDdsBridge {
   std::unique_ptr<Impl> impl_;
 };
 
+// The joint's target points as a JointTrajectory sample (unstamped: it starts on receipt),
+// over its own storage.
+class TrajectorySample {
+ public:
+  explicit TrajectorySample(std::vector<host::TrajectoryPoint> points);
+  TrajectorySample(const TrajectorySample&) = delete;
+  TrajectorySample& operator=(const TrajectorySample&) = delete;
+  const msg::JointTrajectory& message() const { return message_; }
+
+ private:
+  std::vector<host::TrajectoryPoint> points_;
+  std::vector<msg::JointTrajectoryPoint> out_;
+  const char* names_[1] = {kJointName};
+  msg::JointTrajectory message_{};
+};
+
 // The board's diagnostics as an operator reads them.
 struct DiagnosticSample {
   DiagnosticLevel level = DiagnosticLevel::kOk;
