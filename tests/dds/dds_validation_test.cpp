@@ -156,7 +156,7 @@ TEST(DdsValidation, ModeCommandsNeedAKnownModeAndStrategy) {
 }
 
 TEST(DdsValidation, CostWeightsAreKnownOnceFiniteAndInRange) {
-  const dds::WeightLimits known[] = {{"q_theta", 0, 1e6}, {"r_motor", 1e-6, 10}};
+  const dds::NamedRange known[] = {{"q_theta", 0, 1e6}, {"r_motor", 1e-6, 10}};
   const char* names[] = {"r_motor", "q_theta"};
   double values[] = {0.5, 1000};
   msg::CostWeights w{};
@@ -180,6 +180,50 @@ TEST(DdsValidation, CostWeightsAreKnownOnceFiniteAndInRange) {
   const char* unknown[] = {"q_theta", "q_pressure"};
   w.names = dds::borrow(unknown, 2);
   EXPECT_EQ(dds::validate(w, known, 2, kNow, {}).reason, Rejection::kUnknownValue);
+}
+
+TEST(DdsValidation, TaskCommandsNameAKnownTaskAndOnlyItsParameters) {
+  const dds::NamedRange squat[] = {{"hip_height", 0.4, 0.9}, {"period", 1.0, 10.0}};
+  const dds::NamedRange walk[] = {{"speed", 0.0, 0.5}};
+  const dds::TaskSpec tasks[] = {{"stand", nullptr, 0}, {"squat", squat, 2}, {"walk", walk, 1}};
+  msg::TaskCommand c{};
+  c.task = dds::borrow("stand");
+  EXPECT_TRUE(dds::validate(c, tasks, 3, kNow, {}).ok) << "no parameters: the task's defaults";
+  const char* names[] = {"period", "hip_height"};
+  double values[] = {4.0, 0.7};
+  c.task = dds::borrow("squat");
+  c.parameter_names = dds::borrow(names, 2);
+  c.parameter_values = dds::borrow(values, 2);
+  EXPECT_TRUE(dds::validate(c, tasks, 3, kNow, {}).ok);
+  c.task = dds::borrow("walk");
+  dds::Verdict v = dds::validate(c, tasks, 3, kNow, {});
+  EXPECT_EQ(v.reason, Rejection::kUnknownValue) << "walk takes no period";
+  EXPECT_NE(v.detail.find("parameter_names[0] 'period' is not one of: speed"), std::string::npos)
+      << v.detail;
+  c.task = dds::borrow("jump");
+  v = dds::validate(c, tasks, 3, kNow, {});
+  EXPECT_EQ(v.reason, Rejection::kUnknownValue);
+  EXPECT_NE(v.detail.find("task 'jump' is not one of: stand, squat, walk"), std::string::npos)
+      << v.detail;
+  c.task = nullptr;
+  EXPECT_EQ(dds::validate(c, tasks, 3, kNow, {}).reason, Rejection::kUnknownValue);
+  c.task = dds::borrow("squat");
+  values[1] = 0.2;
+  v = dds::validate(c, tasks, 3, kNow, {});
+  EXPECT_EQ(v.reason, Rejection::kOutOfRange);
+  EXPECT_NE(v.detail.find("parameter_values[1] (hip_height)"), std::string::npos) << v.detail;
+  values[1] = kNaN;
+  EXPECT_EQ(dds::validate(c, tasks, 3, kNow, {}).reason, Rejection::kNotFinite);
+  values[1] = 0.7;
+  c.parameter_values = dds::borrow(values, 1);
+  EXPECT_EQ(dds::validate(c, tasks, 3, kNow, {}).reason, Rejection::kLengthMismatch);
+  const char* twice[] = {"period", "period"};
+  c.parameter_names = dds::borrow(twice, 2);
+  c.parameter_values = dds::borrow(values, 2);
+  EXPECT_EQ(dds::validate(c, tasks, 3, kNow, {}).reason, Rejection::kDuplicateName);
+  c.parameter_names = dds::borrow(names, 2);
+  c.header.stamp = dds::from_seconds<msg::Time>(kNow - 60.0);
+  EXPECT_EQ(dds::validate(c, tasks, 3, kNow, {}).reason, Rejection::kBadTimeStamp);
 }
 
 TEST(DdsValidation, JointStatesNeedConsistentFiniteArrays) {

@@ -68,7 +68,7 @@ TEST(IocPublish, LearnedWeightsReachAReaderAsCostWeights) {
       << output;
 
   const hmpc::ioc::Weights learned = hmpc::ioc::load_weights(dir + "/learned.weights");
-  std::vector<dds::WeightLimits> known;
+  std::vector<dds::NamedRange> known;
   for (const char* name : hmpc::ioc::kWeightNames) known.push_back({name, 1e-300, 1e300});
   int received = 0;
   ASSERT_TRUE(reader.wait(kPatience_s));

@@ -304,6 +304,64 @@ TEST_F(RosWireFormat, OurModeCommandCostWeightsAndTelemetry) {
                want_t);
 }
 
+TEST_F(RosWireFormat, OurMpcPlanAndTaskCommand) {
+  const char* joints[] = {"left_hip", "left_knee"};
+  const double q0[] = {0.1, -0.2}, v0[] = {0.0, 0.5}, tau0[] = {10.0, -20.0};
+  const double q1[] = {0.15, -0.25}, v1[] = {1.0, -1.5}, tau1[] = {12.5, -18.0};
+  msg::JointTrajectoryPoint points[2]{};
+  points[0].positions = dds::borrow(q0, 2);
+  points[0].velocities = dds::borrow(v0, 2);
+  points[0].effort = dds::borrow(tau0, 2);
+  points[0].time_from_start = {0, 0};
+  points[1].positions = dds::borrow(q1, 2);
+  points[1].velocities = dds::borrow(v1, 2);
+  points[1].effort = dds::borrow(tau1, 2);
+  points[1].time_from_start = {0, 30000000};
+  const msg::Pose poses[] = {{{0.0, 0.0, 0.9}, {0.0, 0.0, 0.0, 1.0}},
+                             {{0.01, 0.0, 0.89}, {0.0, 0.05, 0.0, 0.99875}}};
+  const msg::Twist twists[] = {{{0.3, 0.0, -0.1}, {0.0, 0.2, 0.0}}};
+  msg::MpcPlan plan{};
+  plan.header.stamp = {5, 60000000};
+  plan.header.frame_id = dds::borrow("world");
+  plan.sequence_number = 9;
+  plan.controller = dds::borrow("coarse_fast");
+  plan.solve_status = 1;
+  plan.iterations = 4;
+  plan.lower_iterations = 2;
+  plan.solve_time_us = 21000;
+  plan.cost = 1234.5;
+  plan.joints.header.frame_id = dds::borrow("");
+  plan.joints.joint_names = dds::borrow(joints, 2);
+  plan.joints.points = dds::borrow<decltype(plan.joints.points)>(points, 2);
+  plan.base_poses = dds::borrow<decltype(plan.base_poses)>(poses, 2);
+  plan.base_twists = dds::borrow<decltype(plan.base_twists)>(twists, 1);
+  Cdr want_plan;
+  want_plan.header(5, 60000000, "world").u32(9).str("coarse_fast").u8(1).u16(4).u16(2);
+  want_plan.u32(21000).f64(1234.5);
+  want_plan.header(0, 0, "").strs({"left_hip", "left_knee"}).u32(2);
+  want_plan.f64s({0.1, -0.2}).f64s({0.0, 0.5}).f64s({}).f64s({10.0, -20.0}).i32(0).u32(0);
+  want_plan.f64s({0.15, -0.25}).f64s({1.0, -1.5}).f64s({}).f64s({12.5, -18.0});
+  want_plan.i32(0).u32(30000000);
+  want_plan.u32(2).f64(0.0).f64(0.0).f64(0.9).f64(0.0).f64(0.0).f64(0.0).f64(1.0);
+  want_plan.f64(0.01).f64(0.0).f64(0.89).f64(0.0).f64(0.05).f64(0.0).f64(0.99875);
+  want_plan.u32(1).f64(0.3).f64(0.0).f64(-0.1).f64(0.0).f64(0.2).f64(0.0);
+  expect_bytes(round_trip(plan, "/hmpc/test/plan", "hmpc_msgs::msg::dds_::MpcPlan_"), want_plan);
+
+  const char* names[] = {"hip_height"};
+  const double values[] = {0.7};
+  msg::TaskCommand task{};
+  task.header.stamp = {11, 12};
+  task.header.frame_id = dds::borrow("");
+  task.sequence_number = 3;
+  task.task = dds::borrow("squat");
+  task.parameter_names = dds::borrow(names, 1);
+  task.parameter_values = dds::borrow(values, 1);
+  Cdr want_task;
+  want_task.header(11, 12, "").u32(3).str("squat").strs({"hip_height"}).f64s({0.7});
+  expect_bytes(round_trip(task, "/hmpc/test/task", "hmpc_msgs::msg::dds_::TaskCommand_"),
+               want_task);
+}
+
 TEST(RosNames, TopicNamesFollowRos2) {
   EXPECT_EQ(dds::dds_topic_name("/hmpc/forearm_0/joint_states"), "rt/hmpc/forearm_0/joint_states");
   EXPECT_EQ(dds::dds_topic_name("/diagnostics"), "rt/diagnostics");

@@ -1,12 +1,17 @@
 // Fuzz target for the checks every incoming DDS sample passes before the host acts on it
-// (hmpc/dds/validation.hpp), on the forearm's limits. A deserialised sample can hold any bit
-// pattern in any field and any sequence length, so the input bytes build a JointTrajectory
-// (names from a small table, 0..16 points whose time, positions and velocities are raw words)
-// and a ModeCommand (raw mode, stamp and a strategy from a table that includes near misses).
-// Properties: an accepted trajectory names the one joint once, its times start at 0 or later
-// and strictly increase with nanoseconds below 1e9, every number is finite, and its
-// interpolant, sampled densely, stays inside the joint's range and speed; an accepted command
-// has a known mode and strategy; a rejection always says why.
+// (hmpc/dds/validation.hpp). A deserialised sample can hold any bit pattern in any field and
+// any sequence length, so the input bytes build, in turn:
+// - a ModeCommand (raw mode, stamp and a strategy from a table that includes near misses): an
+//   accepted one has a known mode and strategy;
+// - a JointTrajectory on the forearm's limits (names from a small table, 0..16 points whose
+//   time, positions and velocities are raw words): an accepted one names the one joint once,
+//   its times start at 0 or later and strictly increase with nanoseconds below 1e9, every
+//   number is finite, and its interpolant, sampled densely, stays inside the joint's range and
+//   speed;
+// - a TaskCommand (a task and 0..4 parameters from tables with near misses, raw values,
+//   sometimes one value too many or too few; CostWeights share its checks): an accepted one
+//   names a known task and only its parameters, once each, every value inside its range.
+// A rejection always says why.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -154,12 +159,59 @@ void check_command(Reader& in) {
   if (c.header.stamp.nanosec >= 1000000000u) fail("accepted a stamp's nanosec of a second");
 }
 
+// Tasks as a humanoid would take them; the names drawn include near misses and another task's.
+const dds::NamedRange kSquat[] = {{"hip_height", 0.4, 0.9}, {"period", 1.0, 10.0}};
+const dds::NamedRange kWalk[] = {{"speed", 0.0, 0.5}};
+const dds::TaskSpec kTasks[] = {{"stand", nullptr, 0}, {"squat", kSquat, 2}, {"walk", kWalk, 1}};
+const char* const kTaskNames[] = {"stand", "squat", "walk", "Squat", "", "walk ", "jump", "squat"};
+const char* const kParameterNames[] = {"hip_height", "period", "speed", "Period"};
+
+void check_task(Reader& in) {
+  msg::TaskCommand c{};
+  const auto pick = in.take<std::uint8_t>();
+  c.task = dds::borrow(kTaskNames[pick % 8]);
+  const char* names[4];
+  double values[4];
+  const std::size_t name_count = (pick >> 3) % 5;
+  const std::size_t value_count = (pick & 0x80) ? (name_count + 1) % 5 : name_count;
+  for (std::size_t i = 0; i < name_count; ++i)
+    names[i] = kParameterNames[in.take<std::uint8_t>() % 4];
+  for (std::size_t i = 0; i < value_count; ++i) values[i] = in.take<double>();
+  c.parameter_names = dds::borrow(names, name_count);
+  c.parameter_values = dds::borrow(values, value_count);
+  const dds::Verdict v = dds::validate(c, kTasks, std::size(kTasks), kNow, {});
+  if (!v.ok) {
+    if (v.detail.empty()) fail("rejected a task without a reason");
+    return;
+  }
+  const dds::TaskSpec* task = nullptr;
+  for (const auto& t : kTasks) {
+    if (std::strcmp(t.name, c.task) == 0) task = &t;
+  }
+  if (task == nullptr) fail("accepted an unknown task");
+  if (value_count != name_count) fail("accepted parameters with values of another count");
+  for (std::size_t i = 0; i < name_count; ++i) {
+    const dds::NamedRange* range = nullptr;
+    for (std::size_t k = 0; k < task->parameter_count; ++k) {
+      if (std::strcmp(task->parameters[k].name, names[i]) == 0) range = &task->parameters[k];
+    }
+    if (range == nullptr) fail("accepted a parameter the task does not take");
+    for (std::size_t j = 0; j < i; ++j) {
+      if (std::strcmp(names[i], names[j]) == 0) fail("accepted a parameter named twice");
+    }
+    if (!(values[i] >= range->min && values[i] <= range->max)) {
+      fail("accepted a parameter outside its range");
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   Reader in(data, size);
   check_command(in);
   check_trajectory(in);
+  check_task(in);
   return 0;
 }
 
@@ -173,8 +225,9 @@ void put(hmpc::fuzz::Bytes& b, const void* p, std::size_t n) {
 }
 }  // namespace
 
-// Seeds: a good command and a good trajectory of 1..8 points at 0.1 s, each point with a
-// position and (alternately) a velocity, with the special doubles a sender may put in.
+// Seeds: a good command, a good trajectory of 1..8 points at 0.1 s, each point with a
+// position and (alternately) a velocity, and a squat with both parameters, with the special
+// doubles a sender may put in (as the trajectory's last position and the squat's period).
 int main(int argc, char** argv) {
   using hmpc::fuzz::Bytes;
   std::vector<Bytes> seeds;
@@ -199,6 +252,12 @@ int main(int argc, char** argv) {
           put(b, &qd, 8);
         }
       }
+      b.push_back(1 | (2 << 3));  // squat, two parameters
+      b.push_back(0);             // hip_height
+      b.push_back(1);             // period
+      const double hip_height = 0.7;
+      put(b, &hip_height, 8);
+      put(b, &special, 8);
       seeds.push_back(b);
     }
   }

@@ -90,9 +90,9 @@ std::string default_namespace(proto::NodeId node) {
   return "/hmpc/forearm_" + std::to_string(unsigned{node});
 }
 
-const std::array<WeightLimits, 4>& forearm_weight_limits() {
-  static const std::array<WeightLimits, 4> limits = [] {
-    std::array<WeightLimits, 4> l{};
+const std::array<NamedRange, 4>& forearm_weight_limits() {
+  static const std::array<NamedRange, 4> limits = [] {
+    std::array<NamedRange, 4> l{};
     const proto::Signal signals[] = {
         proto::Signal::kCostWeightsTheta, proto::Signal::kCostWeightsPressure,
         proto::Signal::kCostWeightsTorque, proto::Signal::kCostWeightsValve};

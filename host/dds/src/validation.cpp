@@ -45,6 +45,20 @@ Verdict check_finite(const char* field, long point, const dds_sequence_double& v
   return Verdict::accept();
 }
 
+// The place of name among known's names; known_count when it is not there (or null).
+std::size_t find_name(const char* name, const char* const* known, std::size_t known_count) {
+  std::size_t k = 0;
+  while (k < known_count && !(name && std::strcmp(name, known[k]) == 0)) ++k;
+  return k;
+}
+
+// An unknown name's rejection: what was given, then the names known.
+Verdict not_one_of(const std::string& given, const char* const* known, std::size_t known_count) {
+  std::string expected;
+  for (std::size_t n = 0; n < known_count; ++n) expected += (n ? ", " : "") + text_of(known[n]);
+  return Verdict::reject(Rejection::kUnknownValue, given + " is not one of: " + expected);
+}
+
 // Names all different and each in `known` (if given): index[i] is name i's place in known.
 Verdict check_names(const char* field, const dds_sequence_string& names, const char* const* known,
                     std::size_t known_count, std::size_t* index) {
@@ -60,13 +74,9 @@ Verdict check_names(const char* field, const dds_sequence_string& names, const c
       }
     }
     if (known == nullptr) continue;
-    std::size_t k = 0;
-    while (k < known_count && std::strcmp(name, known[k]) != 0) ++k;
+    const std::size_t k = find_name(name, known, known_count);
     if (k == known_count) {
-      std::string expected;
-      for (std::size_t n = 0; n < known_count; ++n) expected += (n ? ", " : "") + text_of(known[n]);
-      return Verdict::reject(Rejection::kUnknownValue,
-                             format("%s[%u] '%s' is not one of: ", field, i, name) + expected);
+      return not_one_of(format("%s[%u] '%s'", field, i, name), known, known_count);
     }
     index[i] = k;
   }
@@ -248,37 +258,65 @@ Verdict validate(const msg::ModeCommand& command, const char* const* strategies,
         Rejection::kUnknownValue,
         format("mode %u is not idle (1), hold (2) or run (3)", unsigned{command.mode}));
   }
-  const char* strategy = command.strategy;
-  for (std::size_t i = 0; i < strategy_count && strategy; ++i) {
-    if (std::strcmp(strategy, strategies[i]) == 0) return Verdict::accept();
+  if (find_name(command.strategy, strategies, strategy_count) == strategy_count) {
+    return not_one_of("strategy '" + text_of(command.strategy) + "'", strategies, strategy_count);
   }
-  std::string expected;
-  for (std::size_t i = 0; i < strategy_count; ++i)
-    expected += (i ? ", " : "") + text_of(strategies[i]);
-  return Verdict::reject(Rejection::kUnknownValue,
-                         "strategy '" + text_of(strategy) + "' is not one of: " + expected);
+  return Verdict::accept();
 }
 
-Verdict validate(const msg::CostWeights& weights, const WeightLimits* known,
-                 std::size_t known_count, double now_unix_s, const StampPolicy& stamps) {
-  Verdict v = check_stamp(weights.header.stamp, now_unix_s, stamps);
-  if (!v.ok) return v;
-  const std::size_t n = weights.names._length;
-  if (weights.values._length != n) {
-    return Verdict::reject(Rejection::kLengthMismatch,
-                           format("%u values for %zu names", weights.values._length, n));
+namespace {
+
+// Named values against the known ones: as many values as names, each name known and given
+// once, each value finite and inside its range.
+Verdict check_named_values(const char* names_field, const dds_sequence_string& names,
+                           const char* values_field, const dds_sequence_double& values,
+                           const NamedRange* known, std::size_t known_count) {
+  const std::size_t n = names._length;
+  if (values._length != n) {
+    return Verdict::reject(Rejection::kLengthMismatch, format("%u %s for %zu %s", values._length,
+                                                              values_field, n, names_field));
   }
-  if (n == 0) return Verdict::reject(Rejection::kLengthMismatch, "no weights");
   std::size_t index[kMaxKnown];
-  v = check_names_of("names", weights.names, known, known_count, index);
+  Verdict v = check_names_of(names_field, names, known, known_count, index);
   if (!v.ok) return v;
   for (std::size_t i = 0; i < n; ++i) {
-    const WeightLimits& w = known[index[i]];
-    v = check_value(weights.values._buffer[i], w.min, w.max,
-                    [&] { return format("values[%zu] (%s)", i, w.name); });
+    const NamedRange& r = known[index[i]];
+    v = check_value(values._buffer[i], r.min, r.max,
+                    [&] { return format("%s[%zu] (%s)", values_field, i, r.name); });
     if (!v.ok) return v;
   }
   return Verdict::accept();
+}
+
+}  // namespace
+
+Verdict validate(const msg::CostWeights& weights, const NamedRange* known, std::size_t known_count,
+                 double now_unix_s, const StampPolicy& stamps) {
+  Verdict v = check_stamp(weights.header.stamp, now_unix_s, stamps);
+  if (!v.ok) return v;
+  if (weights.names._length == 0 && weights.values._length == 0) {
+    return Verdict::reject(Rejection::kLengthMismatch, "no weights");
+  }
+  return check_named_values("names", weights.names, "values", weights.values, known, known_count);
+}
+
+Verdict validate(const msg::TaskCommand& command, const TaskSpec* tasks, std::size_t task_count,
+                 double now_unix_s, const StampPolicy& stamps) {
+  Verdict v = check_stamp(command.header.stamp, now_unix_s, stamps);
+  if (!v.ok) return v;
+  if (task_count > kMaxKnown) {
+    return Verdict::reject(Rejection::kTooLarge,
+                           format("%zu tasks known, at most %zu", task_count, kMaxKnown));
+  }
+  const char* names[kMaxKnown];
+  for (std::size_t k = 0; k < task_count; ++k) names[k] = tasks[k].name;
+  const std::size_t t = find_name(command.task, names, task_count);
+  if (t == task_count) {
+    return not_one_of("task '" + text_of(command.task) + "'", names, task_count);
+  }
+  return check_named_values("parameter_names", command.parameter_names, "parameter_values",
+                            command.parameter_values, tasks[t].parameters,
+                            tasks[t].parameter_count);
 }
 
 Verdict validate(const msg::JointState& state, double now_unix_s, const StampPolicy& stamps) {

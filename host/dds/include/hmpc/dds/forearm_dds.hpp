@@ -76,7 +76,7 @@ struct ForearmTelemetrySample {
 
 // The weights a CostWeights message may set, by the CAN frame's signal names (w_theta, w_p,
 // w_tau, w_v: Eq. 3.3), each from its smallest non-zero value to its maximum on the bus.
-const std::array<WeightLimits, 4>& forearm_weight_limits();
+const std::array<NamedRange, 4>& forearm_weight_limits();
 
 // What the host knows of its board after each SolveTelemetry.
 struct ForearmStateSample {

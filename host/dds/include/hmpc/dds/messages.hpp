@@ -17,6 +17,8 @@
 #include "hmpc_msgs/msg/CostWeights.h"
 #include "hmpc_msgs/msg/ForearmTelemetry.h"
 #include "hmpc_msgs/msg/ModeCommand.h"
+#include "hmpc_msgs/msg/MpcPlan.h"
+#include "hmpc_msgs/msg/TaskCommand.h"
 #include "nav_msgs/msg/Odometry.h"
 #include "sensor_msgs/msg/Imu.h"
 #include "sensor_msgs/msg/JointState.h"
@@ -39,6 +41,10 @@ using KeyValue = diagnostic_msgs_msg_dds__KeyValue_;
 using ModeCommand = hmpc_msgs_msg_dds__ModeCommand_;
 using CostWeights = hmpc_msgs_msg_dds__CostWeights_;
 using ForearmTelemetry = hmpc_msgs_msg_dds__ForearmTelemetry_;
+using MpcPlan = hmpc_msgs_msg_dds__MpcPlan_;
+using TaskCommand = hmpc_msgs_msg_dds__TaskCommand_;
+using Pose = geometry_msgs_msg_dds__Pose_;
+using Twist = geometry_msgs_msg_dds__Twist_;
 }  // namespace msg
 
 // diagnostic_msgs/DiagnosticStatus's level constants.
@@ -64,6 +70,8 @@ HMPC_DDS_DESCRIPTOR(msg::DiagnosticArray, diagnostic_msgs_msg_dds__DiagnosticArr
 HMPC_DDS_DESCRIPTOR(msg::ModeCommand, hmpc_msgs_msg_dds__ModeCommand__desc)
 HMPC_DDS_DESCRIPTOR(msg::CostWeights, hmpc_msgs_msg_dds__CostWeights__desc)
 HMPC_DDS_DESCRIPTOR(msg::ForearmTelemetry, hmpc_msgs_msg_dds__ForearmTelemetry__desc)
+HMPC_DDS_DESCRIPTOR(msg::MpcPlan, hmpc_msgs_msg_dds__MpcPlan__desc)
+HMPC_DDS_DESCRIPTOR(msg::TaskCommand, hmpc_msgs_msg_dds__TaskCommand__desc)
 #undef HMPC_DDS_DESCRIPTOR
 
 // A sequence over the caller's n elements; DDS reads them and never frees them. The generated C

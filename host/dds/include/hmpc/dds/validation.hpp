@@ -86,16 +86,28 @@ Verdict validate(const msg::JointTrajectory& trajectory, const JointLimits* join
 Verdict validate(const msg::ModeCommand& command, const char* const* strategies,
                  std::size_t strategy_count, double now_unix_s, const StampPolicy& stamps);
 
-// One weight a CostWeights message may set.
-struct WeightLimits {
+// One named value a message may set (a cost weight, a task's parameter), with its range.
+struct NamedRange {
   const char* name;
   double min;
   double max;
 };
 // hmpc_msgs/CostWeights: as many values as names, each name known and given once, each value
 // finite and inside its limits. A message may set any subset of the weights.
-Verdict validate(const msg::CostWeights& weights, const WeightLimits* known,
-                 std::size_t known_count, double now_unix_s, const StampPolicy& stamps);
+Verdict validate(const msg::CostWeights& weights, const NamedRange* known, std::size_t known_count,
+                 double now_unix_s, const StampPolicy& stamps);
+
+// One task a TaskCommand may name, with the parameters it takes.
+struct TaskSpec {
+  const char* name;
+  const NamedRange* parameters;
+  std::size_t parameter_count;
+};
+// hmpc_msgs/TaskCommand: a task among `tasks`, a sane stamp, and its parameters as CostWeights'
+// values are checked: as many values as names, each one of the task's, given once, finite and
+// in range. No parameters at all is a task with its defaults.
+Verdict validate(const msg::TaskCommand& command, const TaskSpec* tasks, std::size_t task_count,
+                 double now_unix_s, const StampPolicy& stamps);
 
 // sensor_msgs/JointState as a receiver needs it: position, velocity and effort each empty or
 // one per name, finite, and a sane stamp.
