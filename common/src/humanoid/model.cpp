@@ -142,6 +142,7 @@ BasicModel<ArmJoints>::BasicModel(const Parameters& p) {
 
   gravity = Vector3(0.0, 0.0, -p.gravity);
   vertex = Vector3(0.0, 0.0, trunk + head);
+  imu = Vector3(0.0, 0.0, p.imu_above_hip * p.stature);
   sole_height = ankle_height;
   for (int leg = 0; leg < 2; ++leg) {
     for (int j = 0; j < kJointsPerLeg; ++j) {

@@ -87,6 +87,7 @@ struct BasicModel {
   Vector3 gravity;                 // world coordinates
   Vector3 vertex;                  // top of the head, torso coordinates
   Vector3 hand = Vector3::Zero();  // the hand's centre (Eq. 2.53's p_hand), arm coordinates
+  Vector3 imu;                     // the torso IMU's position, torso coordinates
   double sole_height;              // sole plane below the ankle joint (foot frame z)
   JointVector joint_lower, joint_upper, torque_limit;
   JointVector armature;  // reflected actuator inertia (Parameters::armature)

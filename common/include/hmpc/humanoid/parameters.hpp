@@ -126,6 +126,12 @@ struct Parameters {
   double arm_upper = 3.1416;       // [rad] flexion 180 deg
   double arm_torque_limit = 30.0;  // [N m]
   double arm_armature = 0.05;      // [kg m^2]
+
+  // The torso IMU (hmpc/sensors/imu.hpp), axes aligned with the torso frame, on the torso's
+  // centre line this fraction of stature above the mid-hip point. Choice: 0.063 (0.10 m), in
+  // the pelvis, where legged robots carry their IMU close to the floating base's origin so
+  // that the lever arm's centripetal and tangential terms stay small.
+  double imu_above_hip = 0.063;
 };
 
 }  // namespace hmpc::humanoid
