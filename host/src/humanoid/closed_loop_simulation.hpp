@@ -164,6 +164,9 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   run.initial = initial;
   const int count = static_cast<int>(std::lround(duration / kSamplingPeriod));
   run.samples.reserve(count);
+  if (config.record_milliseconds) {
+    run.milliseconds.reserve(static_cast<std::size_t>(count) * kFineSteps * kSimulatorSteps);
+  }
   State x = initial;
   LayerTimes times;
   for (int k = 0; k < count; ++k) {
@@ -181,7 +184,12 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
         const double t = t0 + (j * kSimulatorSteps + i) * kSimulatorStep;
         sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
                        (kSimulatorStep / kCoarseStep);
-        x = simulator.step(x, u, kSimulatorStep);
+        const State next = simulator.step(x, u, kSimulatorStep);
+        if (config.record_milliseconds) {
+          run.milliseconds.push_back(
+              {t + kSimulatorStep, next, (next.v - x.v) / kSimulatorStep, u});
+        }
+        x = next;
         add_vertical_forces(simulator.contact_state(), 1.0 / (kFineSteps * kSimulatorSteps),
                             sample);
       }

@@ -165,8 +165,7 @@ State biped_stance(const ProblemConfig& config, double height) {
   const Model model(config.parameters);
   const ContactModel contact(model, config.parameters, config.contact);
   const Dynamics dynamics(model);
-  const double sink =
-      model.total_mass() * -model.gravity.z() / (kSolePoints * config.contact.stiffness);
+  const double sink = standing_sink(model.total_mass() * -model.gravity.z(), config.contact);
   Kinematics kin;
   ContactState soles;
 

@@ -95,6 +95,13 @@ struct BasicContactState {
   std::array<Matrix3, kContactPoints> force_velocity;
 };
 
+// How far the soles sink into the ground under a standing robot of `weight` [N], its load
+// shared by the eight sole points: the flat ground's height under a standing foot's sole
+// points is minus this.
+inline double standing_sink(double weight, const ContactParameters& contact) {
+  return weight / (kSolePoints * contact.stiffness);
+}
+
 template <int ArmJoints>
 class BasicContactModel {
  public:

@@ -58,7 +58,20 @@ struct ClosedLoopConfig {
   // More makes each plan nearer a local optimum of its cost, as the human demonstrator's
   // (hmpc/ioc/demonstrator.hpp) should be; Coarse-Fast keeps its own.
   int iteration_cap = 0;
+  // Keep every 1 ms simulator step (BasicClosedLoopRun::milliseconds): recorded truth for the
+  // state estimator's sensors and checks.
+  bool record_milliseconds = false;
   ProblemConfig problem{};
+};
+
+// One 1 ms step of the simulator: the state at its end, the step's mean acceleration
+// (v_end - v_start) / 1 ms, and the torque applied.
+template <int A>
+struct BasicSimulatorStep {
+  double time = 0.0;  // [s], at the end of the step
+  BasicState<A> state;
+  BasicVelocity<A> acceleration;
+  BasicJointVector<A> torque;
 };
 
 // One 30 ms sampling period, of the biped (A = 0) or the robot with an arm (A = 1).
@@ -87,12 +100,14 @@ struct BasicClosedLoopSample {
 template <int A>
 struct BasicClosedLoopRun {
   std::vector<BasicClosedLoopSample<A>> samples;
+  std::vector<BasicSimulatorStep<A>> milliseconds;  // with ClosedLoopConfig::record_milliseconds
   BasicState<A> initial;
   double fell_at = -1.0;  // [s] the sample where the run ended early (see fallen_height), or -1
   bool fell() const { return fell_at >= 0.0; }
 };
 using ClosedLoopSample = BasicClosedLoopSample<0>;
 using ClosedLoopRun = BasicClosedLoopRun<0>;
+using SimulatorStep = BasicSimulatorStep<0>;
 using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 
 // Runs `motion` from standing_state at ClosedLoopConfig::start_height, on the biped (A = 0) or, for

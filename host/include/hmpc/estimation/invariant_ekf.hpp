@@ -1,0 +1,161 @@
+// Whole-body base estimation from a torso IMU and the joint encoders, no force sensors: the
+// contact-aided right-invariant EKF of Hartley, Ghaffari, Eustice and Grizzle ("Contact-aided
+// invariant extended Kalman filtering for robot state estimation", IJRR 39(4), 2020).
+//
+// The state is the IMU frame's rotation R (IMU to world), velocity v and position p (world),
+// the points d_L, d_R under the two ankles (world), as one element of the group SE_4(3), and
+// the gyroscope and accelerometer biases b_g, b_a beside it (the paper's "imperfect IEKF").
+// The error xi = (phi, xi_v, xi_p, xi_dL, xi_dR, zeta_g, zeta_a) (21) is right-invariant:
+// X_hat = exp(xi) X. Because the IMU's process model is group-affine, the error's dynamics do
+// not depend on the estimate except through the biases, so the filter stays consistent where a
+// plain EKF's attitude error makes it overconfident.
+//
+// Each 1 ms sample: propagate with the IMU (Eqs. below), then correct with each stance foot's
+// leg kinematics: the point under its ankle, seen from the IMU through the joint angles, must be
+// the stance point d_i, fixed in the world. A swing foot's d_i follows the kinematics and is
+// re-anchored each sample (its error copied from p's: the paper's augmentation of a new contact,
+// xi_d = xi_p for d = p + R FK). Which feet stand is an input: the caller infers it (no force
+// sensors); a stance foot whose kinematic velocity disagrees with standing still is flagged as
+// slipping and re-anchored instead.
+//
+// Fixed-size, allocation-free; one instance per robot.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+
+#include "hmpc/humanoid/contact.hpp"
+#include "hmpc/humanoid/dynamics.hpp"
+#include "hmpc/sensors/imu.hpp"
+
+namespace hmpc::estimation {
+
+using humanoid::Matrix3;
+using humanoid::Vector3;
+
+inline constexpr int kFeet = 2;
+inline constexpr int kErrorSize = 21;
+using Covariance = Eigen::Matrix<double, kErrorSize, kErrorSize>;
+
+struct InvariantEkfConfig {
+  // The IMU's noise densities and bias walks: the filter's process noise (one source with
+  // the simulated sensor, hmpc/sensors/imu.hpp).
+  sensors::ImuConfig imu = sensors::bmi088();
+  // A stance foot's velocity, white [m/s / sqrt(Hz)]: the foot rolling from heel to toe, the
+  // compliant ground. Choice: 0.05, a sole that moves by 5 mm in 10 ms without breaking the
+  // stance model, as Hartley et al. tune theirs (0.1 on Cassie's smaller feet).
+  double stance_foot_noise = 0.05;
+  // Leg kinematics' error [m] per axis: link lengths, joint play, the sole's contact point
+  // moving under the ankle. Choice: 5 mm.
+  double kinematics_noise = 0.005;
+  // The ground is flat at z = 0, as the MPC's contact model has it: a stance point sits at
+  // minus the standing sink of its compliance (humanoid::standing_sink), within ground_noise
+  // [m] (the sink doubles in single support and varies from heel to toe). It makes the height,
+  // otherwise unobservable like the horizontal position, an estimate instead of a drift.
+  humanoid::ContactParameters contact{};
+  double ground_noise = 0.01;
+  // A stance foot whose kinematic velocity (IMU velocity plus the leg's motion) stays above
+  // slip_speed [m/s] for slip_samples in a row is slipping. Choices: 0.3 m/s and 20 samples
+  // (20 ms): a sole rolling from heel to toe and the boards' filtered joint rates (a few ms
+  // late while a joint accelerates) reach 0.3 m/s only for moments.
+  double slip_speed = 0.3;
+  int slip_samples = 20;
+  // A stance foot whose kinematic innovation's squared Mahalanobis distance exceeds this is not
+  // used in that sample (a slip the speed test has not confirmed yet, a heel strike's bounce):
+  // 16.3 is the chi-square distribution's 99.9 % point for 3 degrees of freedom.
+  double innovation_gate = 16.3;
+  // Initial standard deviations beyond what the rest gives: yaw and horizontal position are
+  // set by convention (zero), not measured.
+  double initial_attitude = 0.02;  // rad, roll and pitch from gravity with bias errors
+  double initial_velocity = 0.01;  // m/s, at rest
+  double initial_position = 0.01;  // m
+};
+
+// The robot's base as the MPC needs it: the torso frame's origin and rotation, its velocity in
+// world coordinates and angular velocity in torso coordinates.
+struct BaseEstimate {
+  Vector3 position = Vector3::Zero();                               // torso origin, world [m]
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // torso to world
+  Vector3 velocity = Vector3::Zero();                               // torso origin, world [m/s]
+  Vector3 angular_velocity = Vector3::Zero();                       // torso coordinates [rad/s]
+  Vector3 gyroscope_bias = Vector3::Zero();
+  Vector3 accelerometer_bias = Vector3::Zero();
+  std::array<Vector3, kFeet> stance_points{};  // d_L, d_R, world
+  std::array<bool, kFeet> stance{};            // used as fixed at the last correction
+  std::array<bool, kFeet> slipping{};          // asked to stand, found moving
+  std::array<bool, kFeet> gated{};             // asked to stand, its innovation rejected
+};
+
+// IMU readings averaged over a rest before the filter starts.
+struct ImuRest {
+  Vector3 angular_velocity_sum = Vector3::Zero();
+  Vector3 specific_force_sum = Vector3::Zero();
+  int samples = 0;
+  double seconds = 0.0;
+
+  void add(const sensors::ImuReading& imu, double dt) {
+    angular_velocity_sum += imu.angular_velocity;
+    specific_force_sum += imu.specific_force;
+    ++samples;
+    seconds += dt;
+  }
+  Vector3 mean_angular_velocity() const { return angular_velocity_sum / samples; }
+  Vector3 mean_specific_force() const { return specific_force_sum / samples; }
+};
+
+class InvariantEkf {
+ public:
+  using Model = humanoid::Model;
+  using JointVector = humanoid::JointVector;
+
+  explicit InvariantEkf(const Model& model = Model{}, const InvariantEkfConfig& config = {});
+
+  // Starts the filter on a robot standing still on flat ground (z = 0): roll and pitch from the
+  // mean specific force, the gyroscope bias from the mean rate, the accelerometer bias along
+  // gravity from the mean force's magnitude; yaw and horizontal position zero (unobservable);
+  // height from the legs. Feet on the ground are the stance points.
+  // The rest must hold at least one sample.
+  void initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles);
+
+  // One IMU sample, dt after the last.
+  void propagate(const sensors::ImuReading& imu, double dt);
+  // The leg kinematics of this sample; `stance` says which feet the caller takes as standing.
+  void correct(const JointVector& joint_angles, const JointVector& joint_rates,
+               const std::array<bool, kFeet>& stance);
+
+  BaseEstimate estimate() const;
+  const Covariance& covariance() const { return covariance_; }
+  bool initialized() const { return initialized_; }
+
+ private:
+  // The point under foot i's ankle in IMU coordinates, and its velocity there from the joint
+  // rates (the leg moving, the IMU frame held).
+  void leg_kinematics(const JointVector& angles, const JointVector& rates);
+  void anchor_swing_foot(int foot);
+
+  Model model_;
+  humanoid::Dynamics dynamics_;
+  InvariantEkfConfig config_;
+  double ground_height_;  // of a stance point [m]
+  humanoid::Kinematics kinematics_;
+  std::array<Vector3, kFeet> foot_{};           // FK_i, IMU coordinates
+  std::array<Vector3, kFeet> foot_velocity_{};  // its rate from the joints, IMU coordinates
+
+  bool initialized_ = false;
+  Matrix3 rotation_ = Matrix3::Identity();
+  Vector3 velocity_ = Vector3::Zero();
+  Vector3 position_ = Vector3::Zero();
+  std::array<Vector3, kFeet> stance_point_{};
+  Vector3 gyroscope_bias_ = Vector3::Zero();
+  Vector3 accelerometer_bias_ = Vector3::Zero();
+  Vector3 last_rate_ = Vector3::Zero();  // bias-corrected, for the estimate
+  std::array<bool, kFeet> stance_{};
+  std::array<bool, kFeet> slipping_{};
+  std::array<int, kFeet> fast_samples_{};  // in a row above slip_speed
+  std::array<bool, kFeet> gated_{};
+  Covariance covariance_ = Covariance::Identity();
+};
+
+}  // namespace hmpc::estimation

@@ -1,0 +1,273 @@
+#include "hmpc/estimation/invariant_ekf.hpp"
+
+#include <cmath>
+
+#include "hmpc/humanoid/spatial.hpp"
+
+namespace hmpc::estimation {
+
+namespace {
+
+using humanoid::spatial::skew;
+
+// Blocks of the error xi (21): attitude, velocity, position, the two stance points, biases.
+constexpr int kPhi = 0, kV = 3, kP = 6, kD = 9, kBg = 15, kBa = 18;
+constexpr int kd(int foot) { return kD + 3 * foot; }
+
+// SO(3)'s exponential and left Jacobian J_l(phi) = I + (1 - cos t) / t^2 [phi]x
+// + (t - sin t) / t^3 [phi]x^2, t = |phi| (series near zero).
+Matrix3 exp_so3(const Vector3& phi) {
+  const double t = phi.norm();
+  if (t < 1e-9) return Matrix3::Identity() + skew(phi);
+  return Eigen::AngleAxisd(t, phi / t).toRotationMatrix();
+}
+Matrix3 left_jacobian(const Vector3& phi) {
+  const double t = phi.norm();
+  const Matrix3 s = skew(phi);
+  if (t < 1e-6) return Matrix3::Identity() + 0.5 * s + s * s / 6.0;
+  return Matrix3::Identity() + (1 - std::cos(t)) / (t * t) * s +
+         (t - std::sin(t)) / (t * t * t) * s * s;
+}
+
+}  // namespace
+
+InvariantEkf::InvariantEkf(const Model& model, const InvariantEkfConfig& config)
+    : model_(model), dynamics_(model), config_(config),
+      ground_height_(
+          -humanoid::standing_sink(model.total_mass() * model.gravity.norm(), config.contact)) {}
+
+void InvariantEkf::leg_kinematics(const JointVector& angles, const JointVector& rates) {
+  humanoid::Configuration q;
+  q << 0, 0, 0, 1, 0, 0, 0, angles;  // the torso at the origin, upright: torso coordinates
+  humanoid::Velocity v;
+  v << Eigen::Matrix<double, humanoid::kBaseDofs, 1>::Zero(), rates;
+  dynamics_.kinematics(q, v, kinematics_);
+  const Vector3 sole(0, 0, -model_.sole_height);
+  for (int foot = 0; foot < kFeet; ++foot) {
+    const int body = Model::body_of(foot, humanoid::kAnkle);
+    const Matrix3& r = kinematics_.rotation[body];
+    foot_[foot] = kinematics_.position[body] + r * sole - model_.imu;
+    // The point's velocity: the body's spatial velocity (omega, v_origin) in its coordinates.
+    const auto& s = kinematics_.velocity[body];
+    foot_velocity_[foot] = r * (s.tail<3>() + s.head<3>().cross(sole));
+  }
+}
+
+void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles) {
+  const double g = model_.gravity.norm();
+  const Vector3 force = rest.mean_specific_force();
+  // At rest the accelerometer reads R^T (0, 0, g) + b_a: its direction gives roll and pitch
+  // (a horizontal bias tilts it, unobservably), its magnitude less g the bias along gravity.
+  const Vector3 up = force.normalized();
+  rotation_ = Eigen::Quaterniond::FromTwoVectors(up, Vector3::UnitZ()).toRotationMatrix();
+  accelerometer_bias_ = (force.norm() - g) * up;
+  gyroscope_bias_ = rest.mean_angular_velocity();
+  velocity_.setZero();
+  last_rate_.setZero();
+  leg_kinematics(joint_angles, JointVector::Zero());
+  // The lower sole on the ground.
+  const double lowest = std::min((rotation_ * foot_[0]).z(), (rotation_ * foot_[1]).z());
+  position_ = Vector3(0, 0, ground_height_ - lowest);
+  for (int foot = 0; foot < kFeet; ++foot) {
+    stance_point_[foot] = position_ + rotation_ * foot_[foot];
+    stance_[foot] = true;
+    slipping_[foot] = false;
+    fast_samples_[foot] = 0;
+  }
+  covariance_.setZero();
+  const double a = config_.initial_attitude, vel = config_.initial_velocity;
+  const double pos = config_.initial_position;
+  // Yaw is zero by convention: a small variance keeps the matrix positive definite.
+  covariance_.block<3, 3>(kPhi, kPhi) = Vector3(a * a, a * a, 1e-4).asDiagonal();
+  covariance_.block<3, 3>(kV, kV) = vel * vel * Matrix3::Identity();
+  covariance_.block<3, 3>(kP, kP) = pos * pos * Matrix3::Identity();
+  for (int foot = 0; foot < kFeet; ++foot) {
+    covariance_.block<3, 3>(kd(foot), kd(foot)) = pos * pos * Matrix3::Identity();
+  }
+  // The rest's mean leaves white noise of density / sqrt(seconds) in the gyroscope's bias and
+  // in the accelerometer's along gravity; across gravity the accelerometer's power-up spread
+  // stays (its effect on the attitude is in initial_attitude).
+  const auto& imu = config_.imu;
+  const double t = std::max(rest.seconds, imu.period);
+  const double sg = imu.gyroscope.noise_density / std::sqrt(t);
+  const double sa = imu.accelerometer.noise_density / std::sqrt(t);
+  const double sh = imu.accelerometer.initial_bias;
+  covariance_.block<3, 3>(kBg, kBg) = sg * sg * Matrix3::Identity();
+  const Matrix3 vertical = up * up.transpose();
+  covariance_.block<3, 3>(kBa, kBa) =
+      sa * sa * vertical + sh * sh * (Matrix3::Identity() - vertical);
+  initialized_ = true;
+}
+
+void InvariantEkf::propagate(const sensors::ImuReading& imu, double dt) {
+  if (!initialized_ || !(dt > 0)) return;
+  const Vector3 w = imu.angular_velocity - gyroscope_bias_;
+  const Vector3 a = imu.specific_force - accelerometer_bias_;
+  last_rate_ = w;
+  const Matrix3 r = rotation_;
+  const Vector3 v = velocity_, p = position_;
+  const Vector3 acceleration = r * a + model_.gravity;  // world
+
+  // A: the right-invariant error's dynamics; only the bias columns depend on the estimate.
+  Covariance phi = Covariance::Identity();  // Phi = I + A dt
+  phi.block<3, 3>(kV, kPhi) = skew(model_.gravity) * dt;
+  phi.block<3, 3>(kP, kV) = Matrix3::Identity() * dt;
+  phi.block<3, 3>(kPhi, kBg) = -r * dt;
+  phi.block<3, 3>(kV, kBg) = -skew(v) * r * dt;
+  phi.block<3, 3>(kP, kBg) = -skew(p) * r * dt;
+  for (int foot = 0; foot < kFeet; ++foot) {
+    phi.block<3, 3>(kd(foot), kBg) = -skew(stance_point_[foot]) * r * dt;
+  }
+  phi.block<3, 3>(kV, kBa) = -r * dt;
+
+  // Process noise Ad_X Q Ad_X^T dt: the IMU's and the stance feet's white noise enter in the
+  // IMU frame; Ad_X rotates them and couples attitude noise into each vector by [x]x R.
+  const auto& gyro = config_.imu.gyroscope;
+  const auto& accel = config_.imu.accelerometer;
+  const double qg = gyro.noise_density * gyro.noise_density;
+  const double qa = accel.noise_density * accel.noise_density;
+  const double qc = config_.stance_foot_noise * config_.stance_foot_noise;
+  Covariance q = Covariance::Zero();
+  const Matrix3 rrt_g = qg * Matrix3::Identity();  // R Qg R^T, isotropic
+  const std::array<Vector3, 5> columns = {Vector3::Zero(), v, p, stance_point_[0],
+                                          stance_point_[1]};
+  // Attitude noise in every block (R Qg R^T, cross terms [x]x R Qg R^T [y]x^T).
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 5; ++j) {
+      const Matrix3 si = i == 0 ? Matrix3::Identity() : skew(columns[i]);
+      const Matrix3 sj = j == 0 ? Matrix3::Identity() : skew(columns[j]);
+      q.block<3, 3>(3 * i, 3 * j) = si * rrt_g * sj.transpose();
+    }
+  }
+  q.block<3, 3>(kV, kV) += qa * Matrix3::Identity();
+  for (int foot = 0; foot < kFeet; ++foot) {
+    q.block<3, 3>(kd(foot), kd(foot)) += qc * Matrix3::Identity();
+  }
+  q.block<3, 3>(kBg, kBg) = gyro.bias_random_walk * gyro.bias_random_walk * Matrix3::Identity();
+  q.block<3, 3>(kBa, kBa) = accel.bias_random_walk * accel.bias_random_walk * Matrix3::Identity();
+
+  covariance_ = phi * covariance_ * phi.transpose() + q * dt;
+
+  // The mean: R+ = R Exp(w dt), v+ = v + (R a + g) dt, p+ = p + v dt + (R a + g) dt^2 / 2;
+  // stance points stay.
+  rotation_ = r * exp_so3(w * dt);
+  velocity_ = v + acceleration * dt;
+  position_ = p + v * dt + 0.5 * acceleration * dt * dt;
+}
+
+void InvariantEkf::anchor_swing_foot(int foot) {
+  // d = p + R FK: its error is p's (xi_d = xi_p), plus the kinematics' own.
+  const int d = kd(foot);
+  stance_point_[foot] = position_ + rotation_ * foot_[foot];
+  covariance_.block<3, kErrorSize>(d, 0) = covariance_.block<3, kErrorSize>(kP, 0);
+  covariance_.block<kErrorSize, 3>(0, d) = covariance_.block<kErrorSize, 3>(0, kP);
+  covariance_.block<3, 3>(d, d) = covariance_.block<3, 3>(kP, kP) + config_.kinematics_noise *
+                                                                        config_.kinematics_noise *
+                                                                        Matrix3::Identity();
+}
+
+void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& joint_rates,
+                           const std::array<bool, kFeet>& stance) {
+  if (!initialized_) return;
+  leg_kinematics(joint_angles, joint_rates);
+  // Which feet are used as fixed: asked to stand, and not sliding. A foot's world velocity is
+  // the IMU's plus w x FK plus the leg's own motion.
+  std::array<bool, kFeet> used{};
+  for (int foot = 0; foot < kFeet; ++foot) {
+    const Vector3 speed =
+        velocity_ + rotation_ * (last_rate_.cross(foot_[foot]) + foot_velocity_[foot]);
+    fast_samples_[foot] =
+        stance[foot] && speed.norm() > config_.slip_speed ? fast_samples_[foot] + 1 : 0;
+    slipping_[foot] = fast_samples_[foot] >= config_.slip_samples;
+    // A foot just set down starts from where the legs put it.
+    if (stance[foot] && !stance_[foot]) anchor_swing_foot(foot);
+    used[foot] = stance[foot] && !slipping_[foot];
+  }
+
+  // Per stance foot, with H = -dz/dxi (so that X+ = exp(K z) X removes the error):
+  // kinematics z = R FK_i + p - d_i (zero for a fixed point), H = [0 0 -I ... I at d_i];
+  // ground z = e_z^T d_i - ground height, H = [e_z^T [d_i]x 0 0 ... -e_z^T at d_i] (d_i's
+  // error is phi x d_i + xi_d).
+  constexpr int kRows = 4 * kFeet;
+  Eigen::Matrix<double, kRows, kErrorSize> h = Eigen::Matrix<double, kRows, kErrorSize>::Zero();
+  Eigen::Matrix<double, kRows, 1> z = Eigen::Matrix<double, kRows, 1>::Zero();
+  Eigen::Matrix<double, kRows, kRows> n = Eigen::Matrix<double, kRows, kRows>::Zero();
+  Eigen::Matrix<double, kRows, kRows> unused = Eigen::Matrix<double, kRows, kRows>::Zero();
+  const double nk = config_.kinematics_noise * config_.kinematics_noise;
+  const double ng = config_.ground_noise * config_.ground_noise;
+  bool any = false;
+  for (int foot = 0; foot < kFeet; ++foot) {
+    const int row = 4 * foot;
+    gated_[foot] = false;
+    if (!used[foot]) {
+      unused.block<4, 4>(row, row).setIdentity();
+      continue;
+    }
+    const Vector3& d = stance_point_[foot];
+    const Vector3 innovation = rotation_ * foot_[foot] + position_ - d;
+    // Its covariance H P H^T + N: p's and d's blocks, H = [-I, I].
+    const Matrix3 spread = covariance_.block<3, 3>(kP, kP) +
+                           covariance_.block<3, 3>(kd(foot), kd(foot)) -
+                           covariance_.block<3, 3>(kP, kd(foot)) -
+                           covariance_.block<3, 3>(kd(foot), kP) + nk * Matrix3::Identity();
+    gated_[foot] = innovation.dot(spread.ldlt().solve(innovation)) > config_.innovation_gate;
+    if (gated_[foot]) {
+      used[foot] = false;
+      unused.block<4, 4>(row, row).setIdentity();
+      continue;
+    }
+    any = true;
+    z.segment<3>(row) = innovation;
+    h.block<3, 3>(row, kP) = -Matrix3::Identity();
+    h.block<3, 3>(row, kd(foot)) = Matrix3::Identity();
+    n.block<3, 3>(row, row) = nk * Matrix3::Identity();
+    z[row + 3] = d.z() - ground_height_;
+    h.block<1, 3>(row + 3, kPhi) = Vector3::UnitZ().transpose() * skew(d);
+    h.block<1, 3>(row + 3, kd(foot)) = -Vector3::UnitZ().transpose();
+    n(row + 3, row + 3) = ng;
+  }
+  if (any) {
+    // K = P H^T S^-1, S = H P H^T + N; an unused foot's rows are zero in H and z, and
+    // identity in S, so they take no part.
+    const Eigen::Matrix<double, kErrorSize, kRows> pht = covariance_ * h.transpose();
+    const Eigen::Matrix<double, kRows, kRows> s = h * pht + n + unused;
+    const Eigen::Matrix<double, kErrorSize, kRows> k = pht * s.inverse();
+    const Eigen::Matrix<double, kErrorSize, 1> delta = k * z;
+    // X+ = exp(delta) X: rotation Exp(phi); each vector x becomes Exp(phi) x + J_l(phi) xi.
+    const Vector3 dphi = delta.segment<3>(kPhi);
+    const Matrix3 dr = exp_so3(dphi), jl = left_jacobian(dphi);
+    rotation_ = dr * rotation_;
+    velocity_ = dr * velocity_ + jl * delta.segment<3>(kV);
+    position_ = dr * position_ + jl * delta.segment<3>(kP);
+    for (int foot = 0; foot < kFeet; ++foot) {
+      stance_point_[foot] = dr * stance_point_[foot] + jl * delta.segment<3>(kd(foot));
+    }
+    gyroscope_bias_ += delta.segment<3>(kBg);
+    accelerometer_bias_ += delta.segment<3>(kBa);
+    // Joseph form: (I - K H) P (I - K H)^T + K N K^T, symmetric and positive by construction.
+    const Covariance ikh = Covariance::Identity() - k * h;
+    covariance_ = ikh * covariance_ * ikh.transpose() + k * n * k.transpose();
+  }
+  for (int foot = 0; foot < kFeet; ++foot) {
+    if (!used[foot]) anchor_swing_foot(foot);
+  }
+  stance_ = used;
+}
+
+BaseEstimate InvariantEkf::estimate() const {
+  BaseEstimate e;
+  // The torso origin is -imu from the IMU, in torso (= IMU) coordinates.
+  e.orientation = Eigen::Quaterniond(rotation_);
+  e.angular_velocity = last_rate_;
+  e.position = position_ - rotation_ * model_.imu;
+  e.velocity = velocity_ - rotation_ * last_rate_.cross(model_.imu);
+  e.gyroscope_bias = gyroscope_bias_;
+  e.accelerometer_bias = accelerometer_bias_;
+  e.stance_points = stance_point_;
+  e.stance = stance_;
+  e.slipping = slipping_;
+  e.gated = gated_;
+  return e;
+}
+
+}  // namespace hmpc::estimation
