@@ -186,6 +186,7 @@ TEST(ImuModel, RepeatsWithItsSeedClipsQuantisesAndDelays) {
   sensors::ImuTruth still, turning;
   turning.angular_velocity = Vector3(0, 0, 1.0);
   std::vector<double> yaw;
+  yaw.reserve(8);
   for (int k = 0; k < 3; ++k) yaw.push_back(late.measure(still).angular_velocity.z());
   for (int k = 0; k < 5; ++k) yaw.push_back(late.measure(turning).angular_velocity.z());
   for (int k = 0; k < 6; ++k) EXPECT_LT(std::abs(yaw[k]), 0.1) << k;
