@@ -100,10 +100,9 @@ struct Errors {
   Eigen::Matrix<double, est::kErrorSize, 1> final_sigma;
 };
 
-// Runs the filter: a rest of `rest_seconds` to start, then every sample, both feet standing.
+// Runs the filter: a rest of `rest_seconds` to start, then every sample.
 Errors run_filter(const Recording& r, double rest_seconds) {
-  const Model model;
-  est::InvariantEkf filter(model);
+  est::InvariantEkf filter;
   est::ImuRest rest;
   const int rest_samples = static_cast<int>(std::lround(rest_seconds / kDt));
   double height2 = 0, velocity2 = 0, tilt2 = 0;
@@ -207,6 +206,21 @@ TEST(InvariantEkf, AJumpInOneLegsKinematicsIsGatedOut) {
   filter.correct(kicked, JointVector::Zero(), {true, true});
   EXPECT_FALSE(filter.estimate().gated[0]);
   EXPECT_LT((filter.estimate().position - before.position).norm(), 1e-3);
+}
+
+// Walking and a jump land on heels and roll onto toes. The filter does not yet meet the targets
+// there (README: State estimation); this checks that it stays with the robot instead of
+// diverging, an order of magnitude above the targets: taking the sole's centre as the contact
+// whatever the foot's tilt lost the jump entirely (0.29 m height, 30 m/s velocity, 46 degrees
+// tilt RMS).
+TEST(InvariantEkf, StaysWithTheRobotThroughStepsAndALanding) {
+  for (const char* motion : {"II-walking", "V-low-jump"}) {
+    const Errors e = run_filter(record(motion, 6.0, 22), kRestSeconds);
+    print(motion, e);
+    EXPECT_LT(e.height_rms, 0.1) << motion;
+    EXPECT_LT(e.horizontal_velocity_rms, 0.5) << motion;
+    EXPECT_LT(e.tilt_rms, 10.0 * M_PI / 180) << motion;
+  }
 }
 
 TEST(InvariantEkf, AnUpdateAllocatesNothing) {

@@ -31,10 +31,13 @@ Matrix3 left_jacobian(const Vector3& phi) {
 
 }  // namespace
 
-InvariantEkf::InvariantEkf(const Model& model, const InvariantEkfConfig& config)
-    : model_(model), dynamics_(model), config_(config),
+InvariantEkf::InvariantEkf(const humanoid::Parameters& parameters, const InvariantEkfConfig& config)
+    : model_(parameters), dynamics_(model_), config_(config),
       ground_height_(
-          -humanoid::standing_sink(model.total_mass() * model.gravity.norm(), config.contact)) {}
+          -humanoid::standing_sink(model_.total_mass() * model_.gravity.norm(), config.contact)) {
+  const humanoid::ContactModel contact(model_, parameters, config.contact);
+  for (int c = 0; c < humanoid::kFootPoints; ++c) sole_corner_[c] = contact.point(c).local;
+}
 
 void InvariantEkf::leg_kinematics(const JointVector& angles, const JointVector& rates) {
   humanoid::Configuration q;
@@ -42,15 +45,45 @@ void InvariantEkf::leg_kinematics(const JointVector& angles, const JointVector& 
   humanoid::Velocity v;
   v << Eigen::Matrix<double, humanoid::kBaseDofs, 1>::Zero(), rates;
   dynamics_.kinematics(q, v, kinematics_);
-  const Vector3 sole(0, 0, -model_.sole_height);
   for (int foot = 0; foot < kFeet; ++foot) {
     const int body = Model::body_of(foot, humanoid::kAnkle);
     const Matrix3& r = kinematics_.rotation[body];
-    foot_[foot] = kinematics_.position[body] + r * sole - model_.imu;
-    // The point's velocity: the body's spatial velocity (omega, v_origin) in its coordinates.
+    // A point's velocity: the body's spatial velocity (omega, v_origin) in its coordinates.
     const auto& s = kinematics_.velocity[body];
-    foot_velocity_[foot] = r * (s.tail<3>() + s.head<3>().cross(sole));
+    for (int c = 0; c < humanoid::kFootPoints; ++c) {
+      const Vector3& local = sole_corner_[c];
+      corner_[foot][c] = kinematics_.position[body] + r * local - model_.imu;
+      corner_velocity_[foot][c] = r * (s.tail<3>() + s.head<3>().cross(local));
+    }
   }
+}
+
+std::uint8_t InvariantEkf::support_corners(int foot) const {
+  std::array<double, humanoid::kFootPoints> height{};
+  double lowest = 0;
+  for (int c = 0; c < humanoid::kFootPoints; ++c) {
+    height[c] = rotation_.row(2).dot(corner_[foot][c]);
+    lowest = c == 0 ? height[c] : std::min(lowest, height[c]);
+  }
+  std::uint8_t mask = 0;
+  for (int c = 0; c < humanoid::kFootPoints; ++c) {
+    if (height[c] <= lowest + config_.support_band) mask |= static_cast<std::uint8_t>(1U << c);
+  }
+  return mask;
+}
+
+Vector3 InvariantEkf::mean_of_corners(int foot, std::uint8_t mask, Vector3* velocity) const {
+  Vector3 point = Vector3::Zero();
+  velocity->setZero();
+  int count = 0;
+  for (int c = 0; c < humanoid::kFootPoints; ++c) {
+    if ((mask & (1U << c)) == 0) continue;
+    point += corner_[foot][c];
+    *velocity += corner_velocity_[foot][c];
+    ++count;
+  }
+  *velocity /= count;
+  return point / count;
 }
 
 void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles) {
@@ -65,6 +98,10 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
   velocity_.setZero();
   last_rate_.setZero();
   leg_kinematics(joint_angles, JointVector::Zero());
+  for (int foot = 0; foot < kFeet; ++foot) {
+    support_[foot] = support_corners(foot);
+    foot_[foot] = mean_of_corners(foot, support_[foot], &foot_velocity_[foot]);
+  }
   // The lower sole on the ground.
   const double lowest = std::min((rotation_ * foot_[0]).z(), (rotation_ * foot_[1]).z());
   position_ = Vector3(0, 0, ground_height_ - lowest);
@@ -170,17 +207,40 @@ void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& j
                            const std::array<bool, kFeet>& stance) {
   if (!initialized_) return;
   leg_kinematics(joint_angles, joint_rates);
-  // Which feet are used as fixed: asked to stand, and not sliding. A foot's world velocity is
-  // the IMU's plus w x FK plus the leg's own motion.
+  // Which feet are used as fixed: asked to stand, and not sliding. A foot's velocity relative
+  // to the IMU is w x FK plus the leg's own motion; in double support the two feet's relative
+  // velocity does not involve the estimate's (the legs alone measure it), so a slip is two
+  // stance feet moving apart, and the one slipping the faster in the world. In single support
+  // the legs cannot tell a slip from an error of the estimated velocity: a test against that
+  // velocity would, once it is off by slip_speed, drop every foot and never recover, so a
+  // single stance foot is trusted (the innovation gate still rejects a jump).
+  std::array<Vector3, kFeet> relative{};
+  std::array<std::uint8_t, kFeet> support{};
+  for (int foot = 0; foot < kFeet; ++foot) {
+    support[foot] = support_corners(foot);
+    foot_[foot] = mean_of_corners(foot, support[foot], &foot_velocity_[foot]);
+    relative[foot] = rotation_ * (last_rate_.cross(foot_[foot]) + foot_velocity_[foot]);
+  }
+  const bool both = stance[0] && stance[1];
+  const bool apart = both && (relative[0] - relative[1]).norm() > config_.slip_speed;
+  const int faster = (velocity_ + relative[0]).norm() > (velocity_ + relative[1]).norm() ? 0 : 1;
   std::array<bool, kFeet> used{};
   for (int foot = 0; foot < kFeet; ++foot) {
-    const Vector3 speed =
-        velocity_ + rotation_ * (last_rate_.cross(foot_[foot]) + foot_velocity_[foot]);
-    fast_samples_[foot] =
-        stance[foot] && speed.norm() > config_.slip_speed ? fast_samples_[foot] + 1 : 0;
+    fast_samples_[foot] = apart && foot == faster ? fast_samples_[foot] + 1 : 0;
     slipping_[foot] = fast_samples_[foot] >= config_.slip_samples;
-    // A foot just set down starts from where the legs put it.
-    if (stance[foot] && !stance_[foot]) anchor_swing_foot(foot);
+    // A foot just set down starts from where the legs put its support point. A standing foot
+    // that bears on other corners than before (rolling onto its heel or toes, or back flat)
+    // moves its stance point by the step from the old support point to the new one along its
+    // own sole, which keeps what the filter knew of it, so a leg's kinematics cannot jump
+    // past the innovation gate by changing the support.
+    if (stance[foot] && !stance_[foot]) {
+      anchor_swing_foot(foot);
+    } else if (stance[foot] && support[foot] != support_[foot]) {
+      Vector3 unused_velocity;
+      const Vector3 before = mean_of_corners(foot, support_[foot], &unused_velocity);
+      stance_point_[foot] += rotation_ * (foot_[foot] - before);
+    }
+    support_[foot] = support[foot];
     used[foot] = stance[foot] && !slipping_[foot];
   }
 
@@ -267,6 +327,7 @@ BaseEstimate InvariantEkf::estimate() const {
   e.stance = stance_;
   e.slipping = slipping_;
   e.gated = gated_;
+  for (int foot = 0; foot < kFeet; ++foot) e.support[foot] = stance_[foot] ? support_[foot] : 0;
   return e;
 }
 

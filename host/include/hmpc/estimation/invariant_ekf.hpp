@@ -11,12 +11,12 @@
 // plain EKF's attitude error makes it overconfident.
 //
 // Each 1 ms sample: propagate with the IMU (Eqs. below), then correct with each stance foot's
-// leg kinematics: the point under its ankle, seen from the IMU through the joint angles, must be
-// the stance point d_i, fixed in the world. A swing foot's d_i follows the kinematics and is
-// re-anchored each sample (its error copied from p's: the paper's augmentation of a new contact,
-// xi_d = xi_p for d = p + R FK). Which feet stand is an input: the caller infers it (no force
-// sensors); a stance foot whose kinematic velocity disagrees with standing still is flagged as
-// slipping and re-anchored instead.
+// leg kinematics: its support point (where its sole bears: the sole's centre, an edge or a
+// corner), seen from the IMU through the joint angles, must be the stance point d_i, fixed in
+// the world. A swing foot's d_i follows the kinematics and is re-anchored each sample (its
+// error copied from p's: the paper's augmentation of a new contact, xi_d = xi_p for
+// d = p + R FK). Which feet stand is an input: the caller infers it (no force sensors); of two
+// stance feet moving apart, the faster is flagged as slipping and re-anchored instead.
 //
 // Fixed-size, allocation-free; one instance per robot.
 #pragma once
@@ -52,16 +52,25 @@ struct InvariantEkfConfig {
   double kinematics_noise = 0.005;
   // The ground is flat at z = 0, as the MPC's contact model has it: a stance point sits at
   // minus the standing sink of its compliance (humanoid::standing_sink), within ground_noise
-  // [m] (the sink doubles in single support and varies from heel to toe). It makes the height,
+  // [m] (the sink grows in single support and on a sole's edge). It makes the height,
   // otherwise unobservable like the horizontal position, an estimate instead of a drift.
   humanoid::ContactParameters contact{};
   double ground_noise = 0.01;
-  // A stance foot whose kinematic velocity (IMU velocity plus the leg's motion) stays above
-  // slip_speed [m/s] for slip_samples in a row is slipping. Choices: 0.3 m/s and 20 samples
+  // Two stance feet whose support points move apart faster than slip_speed [m/s] for
+  // slip_samples in a row: the faster of them is slipping. Choices: 0.3 m/s and 20 samples
   // (20 ms): a sole rolling from heel to toe and the boards' filtered joint rates (a few ms
   // late while a joint accelerates) reach 0.3 m/s only for moments.
   double slip_speed = 0.3;
   int slip_samples = 20;
+  // Where a stance foot bears: the mean of its sole's corners (the contact model's four) lying
+  // within support_band [m] of the lowest, in the estimated world: the sole's centre when flat,
+  // an edge's middle when landing on the heel or rolling onto the toes, a corner when on it.
+  // That point, not the one under the ankle, is fixed while the foot rolls; a change of it is
+  // a moved stance point. Choice: 10 mm, the height difference across the 0.23 m foot of a
+  // 2.5 degree tilt: a standing foot rocks that much on the compliant ground (2.5-3.3 degrees
+  // measured under Coarse-Fast standing) and is read as flat; 5 mm read it as on its heels and
+  // left 1.07 degrees of tilt error on standing against 0.92.
+  double support_band = 0.01;
   // A stance foot whose kinematic innovation's squared Mahalanobis distance exceeds this is not
   // used in that sample (a slip the speed test has not confirmed yet, a heel strike's bounce):
   // 16.3 is the chi-square distribution's 99.9 % point for 3 degrees of freedom.
@@ -86,6 +95,9 @@ struct BaseEstimate {
   std::array<bool, kFeet> stance{};            // used as fixed at the last correction
   std::array<bool, kFeet> slipping{};          // asked to stand, found moving
   std::array<bool, kFeet> gated{};             // asked to stand, its innovation rejected
+  // The sole corners a stance foot bears on (bit c: corner c, hmpc/humanoid/contact.hpp's
+  // order heel left, heel right, toe left, toe right; all four: flat).
+  std::array<std::uint8_t, kFeet> support{};
 };
 
 // IMU readings averaged over a rest before the filter starts.
@@ -110,7 +122,8 @@ class InvariantEkf {
   using Model = humanoid::Model;
   using JointVector = humanoid::JointVector;
 
-  explicit InvariantEkf(const Model& model = Model{}, const InvariantEkfConfig& config = {});
+  explicit InvariantEkf(const humanoid::Parameters& parameters = {},
+                        const InvariantEkfConfig& config = {});
 
   // Starts the filter on a robot standing still on flat ground (z = 0): roll and pitch from the
   // mean specific force, the gyroscope bias from the mean rate, the accelerometer bias along
@@ -130,9 +143,13 @@ class InvariantEkf {
   bool initialized() const { return initialized_; }
 
  private:
-  // The point under foot i's ankle in IMU coordinates, and its velocity there from the joint
-  // rates (the leg moving, the IMU frame held).
+  // Foot i's sole corners in IMU coordinates, and their velocities there from the joint rates
+  // (the leg moving, the IMU frame held).
   void leg_kinematics(const JointVector& angles, const JointVector& rates);
+  // The corners foot i bears on (support_band) in the present attitude; the mean of the
+  // corners in `mask` (IMU coordinates) and of their velocities.
+  std::uint8_t support_corners(int foot) const;
+  Vector3 mean_of_corners(int foot, std::uint8_t mask, Vector3* velocity) const;
   void anchor_swing_foot(int foot);
 
   Model model_;
@@ -140,6 +157,9 @@ class InvariantEkf {
   InvariantEkfConfig config_;
   double ground_height_;  // of a stance point [m]
   humanoid::Kinematics kinematics_;
+  std::array<Vector3, humanoid::kFootPoints> sole_corner_{};                // foot coordinates
+  std::array<std::array<Vector3, humanoid::kFootPoints>, kFeet> corner_{};  // IMU coordinates
+  std::array<std::array<Vector3, humanoid::kFootPoints>, kFeet> corner_velocity_{};
   std::array<Vector3, kFeet> foot_{};           // FK_i, IMU coordinates
   std::array<Vector3, kFeet> foot_velocity_{};  // its rate from the joints, IMU coordinates
 
@@ -155,6 +175,7 @@ class InvariantEkf {
   std::array<bool, kFeet> slipping_{};
   std::array<int, kFeet> fast_samples_{};  // in a row above slip_speed
   std::array<bool, kFeet> gated_{};
+  std::array<std::uint8_t, kFeet> support_{};
   Covariance covariance_ = Covariance::Identity();
 };
 
