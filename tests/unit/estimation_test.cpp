@@ -8,6 +8,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <random>
 #include <vector>
 
 #include "hmpc/estimation/invariant_ekf.hpp"
@@ -174,26 +176,46 @@ TEST(InvariantEkf, StandingStillMeetsTheTargetsAndFindsTheGyroscopeBias) {
   }
 }
 
+// A robot standing still in the MPC's standing posture, its filter started after a 0.1 s rest;
+// its IMU has noise and biases, so readings change every sample as a live one's do.
+struct StandingStill {
+  State x = standing_state(ProblemConfig{}, 0.80);
+  sensors::ImuModel imu{sensors::bmi088(kDt), 5};
+  est::InvariantEkf filter;
+
+  StandingStill() {
+    est::ImuRest rest;
+    for (int k = 0; k < 100; ++k) rest.add(read(), kDt);
+    filter.initialize_at_rest(rest, angles());
+  }
+  sensors::ImuReading read() { return imu.measure({Vector3::Zero(), Vector3(0, 0, 9.81)}); }
+  JointVector angles() const { return x.q.tail<kJoints>(); }
+  // `n` samples of the legs standing.
+  void stand(int n) {
+    for (int k = 0; k < n; ++k) {
+      filter.propagate(read(), kDt);
+      filter.correct(angles(), JointVector::Zero(), {true, true});
+    }
+  }
+};
+
+bool finite(const est::BaseEstimate& e) {
+  return e.position.allFinite() && e.orientation.coeffs().allFinite() && e.velocity.allFinite() &&
+         e.angular_velocity.allFinite() && e.gyroscope_bias.allFinite() &&
+         e.accelerometer_bias.allFinite();
+}
+
 // A robot standing still whose left leg's kinematics jump by 5 cm in one sample (a foot
 // kicked away, a bad encoder frame): that foot's innovation is gated out and the estimate does
 // not move; once the jump lasts, the foot is re-anchored where the legs now put it.
 TEST(InvariantEkf, AJumpInOneLegsKinematicsIsGatedOut) {
-  const ProblemConfig config{};
-  const State x = standing_state(config, 0.80);
-  est::InvariantEkf filter;
-  est::ImuRest rest;
-  sensors::ImuReading still;
-  still.specific_force = Vector3(0, 0, 9.81);
-  for (int k = 0; k < 100; ++k) rest.add(still, kDt);
-  filter.initialize_at_rest(rest, x.q.tail<kJoints>());
-  for (int k = 0; k < 500; ++k) {
-    filter.propagate(still, kDt);
-    filter.correct(x.q.tail<kJoints>(), JointVector::Zero(), {true, true});
-  }
+  StandingStill robot;
+  est::InvariantEkf& filter = robot.filter;
+  robot.stand(500);
   const est::BaseEstimate before = filter.estimate();
-  JointVector kicked = x.q.tail<kJoints>();
+  JointVector kicked = robot.angles();
   kicked[kHipFlexion] += 0.06;  // about 5 cm at the sole
-  filter.propagate(still, kDt);
+  filter.propagate(robot.read(), kDt);
   filter.correct(kicked, JointVector::Zero(), {true, true});
   const est::BaseEstimate after = filter.estimate();
   EXPECT_TRUE(after.gated[0]);
@@ -202,10 +224,125 @@ TEST(InvariantEkf, AJumpInOneLegsKinematicsIsGatedOut) {
   EXPECT_LT(after.orientation.angularDistance(before.orientation), 1e-3);
   // The left foot was not used, so it was re-anchored: the next sample with the same legs is
   // consistent again.
-  filter.propagate(still, kDt);
+  filter.propagate(robot.read(), kDt);
   filter.correct(kicked, JointVector::Zero(), {true, true});
   EXPECT_FALSE(filter.estimate().gated[0]);
   EXPECT_LT((filter.estimate().position - before.position).norm(), 1e-3);
+}
+
+// Each bad IMU reading is counted by its reason and replaced by the last good one with its
+// uncertainty added; the estimate is degraded for recovery_samples and then tracking again.
+TEST(InvariantEkf, BadImuReadingsAreCountedReplacedAndReported) {
+  StandingStill robot;
+  est::InvariantEkf& filter = robot.filter;
+  const est::InvariantEkfConfig config;
+  robot.stand(200);
+  EXPECT_EQ(filter.trust(), est::Trust::kTracking);
+  const double attitude_variance = filter.covariance()(0, 0);
+
+  sensors::ImuReading nan = robot.read();
+  nan.angular_velocity.y() = std::nan("");
+  filter.propagate(nan, kDt);
+  EXPECT_EQ(filter.rejected().imu_not_finite, 1);
+  EXPECT_EQ(filter.trust(), est::Trust::kDegraded);
+  EXPECT_TRUE(finite(filter.estimate()));
+  // The stand-in's uncertainty: (unknown_rate dt)^2 on each attitude axis, at least.
+  EXPECT_GT(filter.covariance()(0, 0),
+            attitude_variance + 0.9 * std::pow(config.unknown_rate * kDt, 2));
+
+  sensors::ImuReading saturated = robot.read();
+  saturated.saturated = true;
+  filter.propagate(saturated, kDt);
+  sensors::ImuReading beyond = robot.read();
+  beyond.specific_force.x() = 2 * config.imu.accelerometer.range;
+  filter.propagate(beyond, kDt);
+  EXPECT_EQ(filter.rejected().imu_out_of_range, 2);
+
+  robot.stand(config.recovery_samples - 1);
+  EXPECT_EQ(filter.trust(), est::Trust::kDegraded);
+  robot.stand(1);
+  EXPECT_EQ(filter.trust(), est::Trust::kTracking);
+
+  // A stuck sensor: the same reading 60 times; the first stuck_samples - 1 repeats pass.
+  const sensors::ImuReading stuck = robot.read();
+  for (int k = 0; k < 60; ++k) {
+    filter.propagate(stuck, kDt);
+    filter.correct(robot.angles(), JointVector::Zero(), {true, true});
+  }
+  EXPECT_EQ(filter.rejected().imu_stuck, 60 - (config.stuck_samples - 1));
+  EXPECT_EQ(filter.trust(), est::Trust::kDegraded);
+  EXPECT_EQ(filter.rejected().imu_not_finite, 1);
+}
+
+// Without an IMU and without a foot on the ground nothing bounds the velocity: once its
+// standard deviation passes trusted_velocity_sigma the estimate is lost, and finite.
+TEST(InvariantEkf, WithoutImuOrFeetTheEstimateIsLostNotNonFinite) {
+  StandingStill robot;
+  est::InvariantEkf& filter = robot.filter;
+  robot.stand(100);
+  sensors::ImuReading dead;
+  dead.angular_velocity.setConstant(std::numeric_limits<double>::infinity());
+  for (int k = 0; k < 2000; ++k) {
+    filter.propagate(dead, kDt);
+    filter.correct(robot.angles(), JointVector::Zero(), {false, false});
+  }
+  EXPECT_EQ(filter.trust(), est::Trust::kLost);
+  EXPECT_TRUE(finite(filter.estimate()));
+}
+
+// Bad intervals and joint samples: a non-positive or non-finite interval and a non-finite
+// joint sample are skipped and counted, the estimate unchanged; a gap beyond max_interval
+// loses the estimate until the filter is started again.
+TEST(InvariantEkf, BadIntervalsAndJointSamplesAreSkippedAndAGapLosesTheEstimate) {
+  StandingStill robot;
+  est::InvariantEkf& filter = robot.filter;
+  robot.stand(200);
+  const est::BaseEstimate before = filter.estimate();
+  filter.propagate(robot.read(), 0.0);
+  filter.propagate(robot.read(), -kDt);
+  filter.propagate(robot.read(), std::nan(""));
+  JointVector broken = robot.angles();
+  broken[3] = std::numeric_limits<double>::infinity();
+  filter.correct(broken, JointVector::Zero(), {true, true});
+  EXPECT_EQ(filter.rejected().bad_interval, 3);
+  EXPECT_EQ(filter.rejected().joints_not_finite, 1);
+  EXPECT_EQ(filter.estimate().position, before.position);
+  EXPECT_EQ(filter.estimate().velocity, before.velocity);
+  EXPECT_EQ(filter.trust(), est::Trust::kDegraded);
+
+  filter.propagate(robot.read(), 0.2);  // 200 samples dropped
+  EXPECT_EQ(filter.rejected().bad_interval, 4);
+  robot.stand(500);
+  EXPECT_EQ(filter.trust(), est::Trust::kLost);
+  est::ImuRest rest;
+  for (int k = 0; k < 100; ++k) rest.add(robot.read(), kDt);
+  filter.initialize_at_rest(rest, robot.angles());
+  EXPECT_EQ(filter.trust(), est::Trust::kTracking);
+}
+
+// Garbage of every kind, seeded: huge, infinite and NaN readings, intervals and joint angles,
+// random stance flags. The estimate stays finite throughout.
+TEST(InvariantEkf, GarbageInputNeverMakesTheEstimateNonFinite) {
+  StandingStill robot;
+  est::InvariantEkf& filter = robot.filter;
+  std::mt19937_64 random(7);
+  const std::array<double, 7> values = {
+      0.0, 1.0, -3.0, 1e3, 1e300, std::nan(""), std::numeric_limits<double>::infinity()};
+  auto pick = [&] { return values[random() % values.size()] * (random() % 2 ? 1 : -1); };
+  for (int k = 0; k < 20000; ++k) {
+    sensors::ImuReading r = robot.read();
+    if (random() % 4 == 0) {
+      for (int i = 0; i < 3; ++i) r.angular_velocity[i] = pick();
+      for (int i = 0; i < 3; ++i) r.specific_force[i] = pick();
+    }
+    const double dt = random() % 8 == 0 ? pick() * 1e-3 : kDt;
+    filter.propagate(r, dt);
+    JointVector angles = robot.angles();
+    if (random() % 4 == 0) angles[random() % kJoints] = pick();
+    filter.correct(angles, JointVector::Zero(), {random() % 2 == 0, random() % 2 == 0});
+    ASSERT_TRUE(finite(filter.estimate())) << k;
+    ASSERT_TRUE(filter.covariance().allFinite()) << k;
+  }
 }
 
 // Walking and a jump land on heels and roll onto toes. The filter does not yet meet the targets

@@ -133,13 +133,62 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
   const Matrix3 vertical = up * up.transpose();
   covariance_.block<3, 3>(kBa, kBa) =
       sa * sa * vertical + sh * sh * (Matrix3::Identity() - vertical);
+  last_good_.angular_velocity = rest.mean_angular_velocity();
+  last_good_.specific_force = force;
+  last_good_.saturated = false;
+  same_readings_ = 0;
+  degraded_samples_ = 0;
+  lost_ = false;
   initialized_ = true;
 }
 
 void InvariantEkf::propagate(const sensors::ImuReading& imu, double dt) {
-  if (!initialized_ || !(dt > 0)) return;
-  const Vector3 w = imu.angular_velocity - gyroscope_bias_;
-  const Vector3 a = imu.specific_force - accelerometer_bias_;
+  if (!initialized_) return;
+  if (!std::isfinite(dt) || dt <= 0 || dt > config_.max_interval) {
+    ++rejected_.bad_interval;
+    // A gap too long to integrate loses the estimate; a bad time stamp loses only the sample.
+    if (std::isfinite(dt) && dt > config_.max_interval) lost_ = true;
+    degraded_samples_ = config_.recovery_samples;
+    return;
+  }
+  const bool readable = imu.angular_velocity.allFinite() && imu.specific_force.allFinite();
+  const bool same = readable && imu.angular_velocity == last_reading_.angular_velocity &&
+                    imu.specific_force == last_reading_.specific_force;
+  same_readings_ = same ? same_readings_ + 1 : 0;
+  if (readable) last_reading_ = imu;
+  bool good = false;
+  if (!readable) {
+    ++rejected_.imu_not_finite;
+  } else if (imu.saturated ||
+             imu.angular_velocity.cwiseAbs().maxCoeff() > config_.imu.gyroscope.range ||
+             imu.specific_force.cwiseAbs().maxCoeff() > config_.imu.accelerometer.range) {
+    ++rejected_.imu_out_of_range;
+  } else if (same_readings_ + 1 >= config_.stuck_samples) {
+    ++rejected_.imu_stuck;
+  } else {
+    good = true;
+    last_good_ = imu;
+  }
+  save(snapshot_);
+  integrate(last_good_.angular_velocity - gyroscope_bias_,
+            last_good_.specific_force - accelerometer_bias_, dt);
+  if (good) {
+    if (degraded_samples_ > 0) --degraded_samples_;
+  } else {
+    // The reading stood in for is unknown within unknown_rate and unknown_acceleration.
+    const double sr = config_.unknown_rate * dt, sa = config_.unknown_acceleration * dt;
+    covariance_.block<3, 3>(kPhi, kPhi) += sr * sr * Matrix3::Identity();
+    covariance_.block<3, 3>(kV, kV) += sa * sa * Matrix3::Identity();
+    degraded_samples_ = config_.recovery_samples;
+  }
+  if (!finite()) {
+    restore(snapshot_);
+    ++rejected_.state_not_finite;
+    lost_ = true;
+  }
+}
+
+void InvariantEkf::integrate(const Vector3& w, const Vector3& a, double dt) {
   last_rate_ = w;
   const Matrix3 r = rotation_;
   const Vector3 v = velocity_, p = position_;
@@ -206,6 +255,23 @@ void InvariantEkf::anchor_swing_foot(int foot) {
 void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& joint_rates,
                            const std::array<bool, kFeet>& stance) {
   if (!initialized_) return;
+  if (!joint_angles.allFinite() || !joint_rates.allFinite()) {
+    ++rejected_.joints_not_finite;
+    degraded_samples_ = config_.recovery_samples;
+    return;
+  }
+  save(snapshot_);
+  correct_with_legs(joint_angles, joint_rates, stance);
+  if (!finite()) {
+    restore(snapshot_);
+    ++rejected_.state_not_finite;
+    lost_ = true;
+  }
+}
+
+void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
+                                     const JointVector& joint_rates,
+                                     const std::array<bool, kFeet>& stance) {
   leg_kinematics(joint_angles, joint_rates);
   // Which feet are used as fixed: asked to stand, and not sliding. A foot's velocity relative
   // to the IMU is w x FK plus the leg's own motion; in double support the two feet's relative
@@ -314,6 +380,53 @@ void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& j
   stance_ = used;
 }
 
+void InvariantEkf::save(Snapshot& out) const {
+  out.rotation = rotation_;
+  out.velocity = velocity_;
+  out.position = position_;
+  out.gyroscope_bias = gyroscope_bias_;
+  out.accelerometer_bias = accelerometer_bias_;
+  out.stance_point = stance_point_;
+  out.covariance = covariance_;
+}
+
+void InvariantEkf::restore(const Snapshot& in) {
+  rotation_ = in.rotation;
+  velocity_ = in.velocity;
+  position_ = in.position;
+  gyroscope_bias_ = in.gyroscope_bias;
+  accelerometer_bias_ = in.accelerometer_bias;
+  stance_point_ = in.stance_point;
+  covariance_ = in.covariance;
+}
+
+bool InvariantEkf::finite() const {
+  return rotation_.allFinite() && velocity_.allFinite() && position_.allFinite() &&
+         gyroscope_bias_.allFinite() && accelerometer_bias_.allFinite() &&
+         stance_point_[0].allFinite() && stance_point_[1].allFinite() && covariance_.allFinite() &&
+         last_rate_.allFinite();
+}
+
+Trust InvariantEkf::trust() const {
+  if (!initialized_ || lost_) return Trust::kLost;
+  // Tilt: the attitude error's horizontal part (world axes x, y); velocity: its horizontal part.
+  const double tilt = std::sqrt(covariance_(kPhi, kPhi) + covariance_(kPhi + 1, kPhi + 1));
+  const double speed = std::sqrt(covariance_(kV, kV) + covariance_(kV + 1, kV + 1));
+  if (tilt > config_.trusted_tilt_sigma || speed > config_.trusted_velocity_sigma) {
+    return Trust::kLost;
+  }
+  return degraded_samples_ > 0 ? Trust::kDegraded : Trust::kTracking;
+}
+
+const char* to_string(Trust trust) {
+  switch (trust) {
+    case Trust::kTracking: return "tracking";
+    case Trust::kDegraded: return "degraded";
+    case Trust::kLost: return "lost";
+  }
+  return "unknown";
+}
+
 BaseEstimate InvariantEkf::estimate() const {
   BaseEstimate e;
   // The torso origin is -imu from the IMU, in torso (= IMU) coordinates.
@@ -328,6 +441,7 @@ BaseEstimate InvariantEkf::estimate() const {
   e.slipping = slipping_;
   e.gated = gated_;
   for (int foot = 0; foot < kFeet; ++foot) e.support[foot] = stance_[foot] ? support_[foot] : 0;
+  e.trust = trust();
   return e;
 }
 

@@ -80,6 +80,41 @@ struct InvariantEkfConfig {
   double initial_attitude = 0.02;  // rad, roll and pitch from gravity with bias errors
   double initial_velocity = 0.01;  // m/s, at rest
   double initial_position = 0.01;  // m
+
+  // Bad input. An IMU reading that is not finite, saturated or beyond the sensor's range, or
+  // stuck (the same six values
+  // stuck_samples times in a row: a live MEMS sensor's noise changes its LSBs every sample)
+  // is replaced by the last good one, and the reading it stands for is taken as unknown within
+  // unknown_rate [rad/s] and unknown_acceleration [m/s^2] (1 sigma; choices: what the torso
+  // reaches in our motions, ~1 rad/s and ~1 g), added to the attitude's and the velocity's
+  // covariance. A joint sample that is not finite is skipped. Choice: 20 samples (20 ms).
+  int stuck_samples = 20;
+  double unknown_rate = 1.0;
+  double unknown_acceleration = 10.0;
+  // An interval longer than max_interval [s] between IMU samples (many dropped) cannot be
+  // integrated: the estimate is lost until the filter is started again. Choice: 50 ms, where
+  // 1 g of unknown acceleration moves the base by 1.2 cm.
+  double max_interval = 0.05;
+  // The estimate is degraded for recovery_samples after a bad input (choice: 100 ms, the
+  // MPC's few coarse steps), and lost while its own standard deviation of tilt or of
+  // horizontal velocity exceeds the limits (choices: 5 deg, 0.5 m/s: ten times our targets,
+  // past which an MPC would act on a posture or a speed the robot does not have).
+  int recovery_samples = 100;
+  double trusted_tilt_sigma = 0.0873;  // rad, 5 degrees
+  double trusted_velocity_sigma = 0.5;
+};
+
+// How far the controller can trust the estimate. kLost: hold the robot (or stop it); the filter
+// must be started again (initialize_at_rest) unless only its covariance was too large.
+enum class Trust : std::uint8_t { kTracking, kDegraded, kLost };
+const char* to_string(Trust trust);
+
+// Inputs the filter refused, by reason.
+struct RejectedInputs {
+  int imu_not_finite = 0, imu_out_of_range = 0, imu_stuck = 0;  // out of range: or saturated
+  int bad_interval = 0;  // not finite, not positive, or above max_interval
+  int joints_not_finite = 0;
+  int state_not_finite = 0;  // an update that would have made the estimate non-finite
 };
 
 // The robot's base as the MPC needs it: the torso frame's origin and rotation, its velocity in
@@ -98,6 +133,7 @@ struct BaseEstimate {
   // The sole corners a stance foot bears on (bit c: corner c, hmpc/humanoid/contact.hpp's
   // order heel left, heel right, toe left, toe right; all four: flat).
   std::array<std::uint8_t, kFeet> support{};
+  Trust trust = Trust::kLost;
 };
 
 // IMU readings averaged over a rest before the filter starts.
@@ -132,15 +168,18 @@ class InvariantEkf {
   // The rest must hold at least one sample.
   void initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles);
 
-  // One IMU sample, dt after the last.
+  // One IMU sample, dt after the last (bad readings and intervals: InvariantEkfConfig).
   void propagate(const sensors::ImuReading& imu, double dt);
   // The leg kinematics of this sample; `stance` says which feet the caller takes as standing.
+  // A sample with a non-finite angle or rate is skipped.
   void correct(const JointVector& joint_angles, const JointVector& joint_rates,
                const std::array<bool, kFeet>& stance);
 
   BaseEstimate estimate() const;
   const Covariance& covariance() const { return covariance_; }
   bool initialized() const { return initialized_; }
+  Trust trust() const;
+  const RejectedInputs& rejected() const { return rejected_; }
 
  private:
   // Foot i's sole corners in IMU coordinates, and their velocities there from the joint rates
@@ -151,6 +190,22 @@ class InvariantEkf {
   std::uint8_t support_corners(int foot) const;
   Vector3 mean_of_corners(int foot, std::uint8_t mask, Vector3* velocity) const;
   void anchor_swing_foot(int foot);
+  // One step of the IMU's process model with bias-corrected rate w and force a.
+  void integrate(const Vector3& w, const Vector3& a, double dt);
+  // The correction with finite joint readings.
+  void correct_with_legs(const JointVector& joint_angles, const JointVector& joint_rates,
+                         const std::array<bool, kFeet>& stance);
+
+  // The estimate before an update, restored if the update made it non-finite.
+  struct Snapshot {
+    Matrix3 rotation;
+    Vector3 velocity, position, gyroscope_bias, accelerometer_bias;
+    std::array<Vector3, kFeet> stance_point;
+    Covariance covariance;
+  };
+  void save(Snapshot& out) const;
+  void restore(const Snapshot& in);
+  bool finite() const;
 
   Model model_;
   humanoid::Dynamics dynamics_;
@@ -177,6 +232,14 @@ class InvariantEkf {
   std::array<bool, kFeet> gated_{};
   std::array<std::uint8_t, kFeet> support_{};
   Covariance covariance_ = Covariance::Identity();
+
+  sensors::ImuReading last_reading_{};  // the last finite one, to find a stuck sensor
+  sensors::ImuReading last_good_{};     // stands in for a bad one
+  int same_readings_ = 0;               // in a row
+  int degraded_samples_ = 0;            // left until trusted again
+  bool lost_ = true;                    // until started; after a gap or a non-finite update
+  RejectedInputs rejected_;
+  Snapshot snapshot_{};  // a member: no 4 kB on the stack each sample
 };
 
 }  // namespace hmpc::estimation
