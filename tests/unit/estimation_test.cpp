@@ -176,6 +176,14 @@ TEST(InvariantEkf, StandingStillMeetsTheTargetsAndFindsTheGyroscopeBias) {
   }
 }
 
+// The thesis's slow squat (Sec. 2.7.3): 4 cm at 0.25 Hz, both soles on the compliant ground,
+// rocking onto their heels at the bottom.
+TEST(InvariantEkf, SlowSquattingMeetsTheTargets) {
+  const Errors e = run_filter(record("slow-squat", 10.0, 24), kRestSeconds);
+  print("slow squat", e);
+  expect_within_targets(e);
+}
+
 // A robot standing still in the MPC's standing posture, its filter started after a 0.1 s rest;
 // its IMU has noise and biases, so readings change every sample as a live one's do.
 struct StandingStill {

@@ -136,6 +136,8 @@ void expect_same_motion(const Motion& a, const Motion& b) {
     EXPECT_EQ(a.phases[k].attitude, b.phases[k].attitude) << "phase " << k;
     EXPECT_EQ(a.phases[k].height, b.phases[k].height) << "phase " << k;
     EXPECT_EQ(a.phases[k].velocity, b.phases[k].velocity) << "phase " << k;
+    EXPECT_EQ(a.phases[k].squat_depth, b.phases[k].squat_depth) << "phase " << k;
+    EXPECT_EQ(a.phases[k].squat_period, b.phases[k].squat_period) << "phase " << k;
   }
 }
 
@@ -146,8 +148,8 @@ Motion written_and_read(const Motion& m) {
 }
 
 TEST(HumanoidMotion, WrittenMotionsReadBackExactly) {
-  for (const char* name :
-       {"II-walking", "IV-sitting", "V-low-jump", "VIII-double-flip", "reaching", "squatting"}) {
+  for (const char* name : {"II-walking", "IV-sitting", "V-low-jump", "VIII-double-flip", "reaching",
+                           "squatting", "slow-squat"}) {
     SCOPED_TRACE(name);
     const Motion m = load_motion(motion_path(name));
     expect_same_motion(m, written_and_read(m));
@@ -355,6 +357,30 @@ TEST(HumanoidMotion, GaitSwingsTheFeetInTurn) {
   EXPECT_EQ(Gait{}.foot_height(0.12, 0), 0.0);
 }
 
+// A squat phase: p_z = height - depth (1 - cos(2 pi (t - start) / T)) / 2, at rest where it
+// starts, at its depth half a period later, and its rate added to the velocity target.
+TEST(HumanoidMotion, ASquatPhaseLowersTheHeightTargetSinusoidally) {
+  const Motion m = load_motion(motion_path("slow-squat"));
+  ASSERT_EQ(m.phase_count, 2);
+  const Phase& squat = m.phase_at(1.0);
+  EXPECT_EQ(squat.squat_depth, 0.04);
+  EXPECT_EQ(squat.squat_period, 4.0);
+  EXPECT_DOUBLE_EQ(squat.height_at(1.0), 0.85);
+  EXPECT_NEAR(squat.height_at(3.0), 0.81, 1e-12);
+  EXPECT_NEAR(squat.height_at(5.0), 0.85, 1e-12);
+  EXPECT_NEAR(squat.height_at(2.0), 0.83, 1e-12);
+  for (double t : {1.0, 1.7, 2.5, 3.0, 4.2}) {
+    const double h = 1e-6;
+    const double rate = (squat.height_at(t + h) - squat.height_at(t - h)) / (2 * h);
+    EXPECT_NEAR(squat.velocity_at(t).z(), squat.velocity.z() + rate, 1e-8) << t;
+    EXPECT_EQ(squat.velocity_at(t).head<2>(), squat.velocity.head<2>()) << t;
+  }
+  // Without a squat the targets are the phase's own.
+  const Phase& still = m.phase_at(0.5);
+  EXPECT_EQ(still.height_at(0.7), still.height);
+  EXPECT_EQ(still.velocity_at(0.7), still.velocity);
+}
+
 struct BadCase {
   const char* what;
   std::string text;
@@ -396,6 +422,12 @@ TEST(HumanoidMotion, RejectsBadFilesNamingFileLineAndKey) {
       {"unstable model sub-step",
        replace(kValid, "gait = none", "gait = none\nmodel_substep = 0.02"),
        "test.motion:7: model_substep: must be > 0 s and at most 0.01 s"},
+      {"squat without a period",
+       replace(kValid, "velocity = 1 0 0", "velocity = 1 0 0\nsquat = 0.04 0"),
+       "test.motion:38: squat: the period must be > 0"},
+      {"squat with one number",
+       replace(kValid, "velocity = 1 0 0", "velocity = 1 0 0\nsquat = 0.04"),
+       "test.motion:38: squat: expected 2 numbers"},
       {"bad version", replace(kValid, "hmpc-humanoid-motion 1", "hmpc-humanoid-motion 2"),
        "test.motion:2: expected the version line"},
       {"unknown section", replace(kValid, "[weights]", "[weight]"),

@@ -13,6 +13,7 @@ using humanoid::spatial::skew;
 // Blocks of the error xi (21): attitude, velocity, position, the two stance points, biases.
 constexpr int kPhi = 0, kV = 3, kP = 6, kD = 9, kBg = 15, kBa = 18;
 constexpr int kd(int foot) { return kD + 3 * foot; }
+constexpr std::uint8_t kFlat = (1U << humanoid::kFootPoints) - 1;
 
 // SO(3)'s exponential and left Jacobian J_l(phi) = I + (1 - cos t) / t^2 [phi]x
 // + (t - sin t) / t^3 [phi]x^2, t = |phi| (series near zero).
@@ -67,7 +68,9 @@ std::uint8_t InvariantEkf::support_corners(int foot) const {
   }
   std::uint8_t mask = 0;
   for (int c = 0; c < humanoid::kFootPoints; ++c) {
-    if (height[c] <= lowest + config_.support_band) mask |= static_cast<std::uint8_t>(1U << c);
+    const bool was = (support_[foot] & (1U << c)) != 0;
+    const double band = was ? config_.support_band : config_.support_rejoin;
+    if (height[c] <= lowest + band) mask |= static_cast<std::uint8_t>(1U << c);
   }
   return mask;
 }
@@ -312,8 +315,8 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
 
   // Per stance foot, with H = -dz/dxi (so that X+ = exp(K z) X removes the error):
   // kinematics z = R FK_i + p - d_i (zero for a fixed point), H = [0 0 -I ... I at d_i];
-  // ground z = e_z^T d_i - ground height, H = [e_z^T [d_i]x 0 0 ... -e_z^T at d_i] (d_i's
-  // error is phi x d_i + xi_d).
+  // ground (a flat foot only) z = e_z^T d_i - ground height, H = [e_z^T [d_i]x 0 0 ... -e_z^T
+  // at d_i] (d_i's error is phi x d_i + xi_d).
   constexpr int kRows = 4 * kFeet;
   Eigen::Matrix<double, kRows, kErrorSize> h = Eigen::Matrix<double, kRows, kErrorSize>::Zero();
   Eigen::Matrix<double, kRows, 1> z = Eigen::Matrix<double, kRows, 1>::Zero();
@@ -347,6 +350,10 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
     h.block<3, 3>(row, kP) = -Matrix3::Identity();
     h.block<3, 3>(row, kd(foot)) = Matrix3::Identity();
     n.block<3, 3>(row, row) = nk * Matrix3::Identity();
+    if (support_[foot] != kFlat) {
+      unused(row + 3, row + 3) = 1;
+      continue;
+    }
     z[row + 3] = d.z() - ground_height_;
     h.block<1, 3>(row + 3, kPhi) = Vector3::UnitZ().transpose() * skew(d);
     h.block<1, 3>(row + 3, kd(foot)) = -Vector3::UnitZ().transpose();

@@ -29,7 +29,8 @@ const std::map<std::string, std::vector<KeySpec>>& section_keys() {
         {"w_q2", 1},      {"w_q3", 1},      {"w_q4", 1},    {"w_height", 1},       {"w_vx", 1},
         {"w_vy", 1},      {"w_vz", 1},      {"w_alpha", 1}, {"w_beta", 1},         {"w_omega_x", 1},
         {"w_omega_y", 1}, {"w_omega_z", 1}, {"w_fast", 1},  {"w_fast_control", 1}, {"w_foot", 1}}},
-      {"phase", {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}}},
+      {"phase",
+       {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}, {"squat", 2, true}}},
       {"reach", {{"target", 3}, {"start", 1}, {"w_reach", 1}, {"w_SFE", 1}}},
   };
   return keys;
@@ -187,6 +188,20 @@ const Phase& Motion::phase_at(double t) const {
   return *(later - 1);
 }
 
+double Phase::height_at(double t) const {
+  if (squat_period <= 0.0) return height;
+  return height - 0.5 * squat_depth * (1.0 - std::cos(2 * M_PI * (t - start) / squat_period));
+}
+
+Eigen::Vector3d Phase::velocity_at(double t) const {
+  Eigen::Vector3d v = velocity;
+  if (squat_period > 0.0) {
+    const double omega = 2 * M_PI / squat_period;
+    v.z() -= 0.5 * squat_depth * omega * std::sin(omega * (t - start));
+  }
+  return v;
+}
+
 double Gait::foot_height(double t, int foot) const {
   if (period <= 0.0) return 0.0;
   const double cycle = t / period - std::floor(t / period);
@@ -218,6 +233,14 @@ Motion parse_motion(std::istream& in, const std::string& source) {
       phase.attitude = reader.vector3(section, "attitude");
       phase.height = reader.scalar(section, "height");
       phase.velocity = reader.vector3(section, "velocity");
+      if (section.entries.count("squat") != 0) {
+        const std::vector<double> squat = reader.numbers(section, "squat");
+        if (squat[1] <= 0.0) {
+          reader.fail(reader.line_of(section, "squat"), "squat", "the period must be > 0");
+        }
+        phase.squat_depth = squat[0];
+        phase.squat_period = squat[1];
+      }
       ++motion.phase_count;
       continue;
     }
@@ -350,6 +373,9 @@ void write_motion(std::ostream& out, const Motion& motion, const std::string& co
     const Phase& p = motion.phases[k];
     out << "\n[phase]\nstart = " << number(p.start) << "\nattitude = " << vector3(p.attitude)
         << "\nheight = " << number(p.height) << "\nvelocity = " << vector3(p.velocity) << '\n';
+    if (p.squat_period > 0.0) {
+      out << "squat = " << number(p.squat_depth) << ' ' << number(p.squat_period) << '\n';
+    }
   }
   if (motion.reach.active) {
     out << "\n[reach]\ntarget = " << vector3(motion.reach.target)

@@ -76,11 +76,11 @@ typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const State
   const Eigen::Vector4d dq = f.quaternion - attitude_quaternion(target.attitude);
   r.template segment<3>(0) = w.attitude.head<3>().cwiseSqrt().cwiseProduct(dq.tail<3>());
   r[3] = std::sqrt(w.attitude[3]) * dq[0];
-  r[4] = std::sqrt(w.height) * (f.position.z() - target.height);  // Eq. 4.26
+  r[4] = std::sqrt(w.height) * (f.position.z() - target.height_at(time));  // Eq. 4.26
   r.template segment<3>(5) =
-      w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity);  // Eq. 4.27
-  r[8] = std::sqrt(w.alpha) * (f.alpha_right - f.alpha_left);             // Eq. 4.28
-  r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);           // Eq. 4.29
+      w.velocity.cwiseSqrt().cwiseProduct(f.velocity - target.velocity_at(time));  // Eq. 4.27
+  r[8] = std::sqrt(w.alpha) * (f.alpha_right - f.alpha_left);                      // Eq. 4.28
+  r[9] = std::sqrt(w.beta) * (f.beta_right - beta_right_init_);                    // Eq. 4.29
   r[10] = std::sqrt(w.beta) * (f.beta_left - beta_left_init_);
   r.template segment<3>(11) =
       w.angular_velocity.cwiseSqrt().cwiseProduct(f.angular_velocity);  // Eq. 4.30

@@ -124,12 +124,13 @@ void write_trajectory_csv(std::ostream& out, const Motion& motion,
     for (int i = 0; i < kJoints; ++i) out << ',' << s.state.q[7 + i];
     for (int i = 0; i < kJoints; ++i) out << ',' << s.torque[i];
     const Phase& target = motion.phase_at(s.time);
+    const Eigen::Vector3d target_velocity = target.velocity_at(s.time);
     out << ',' << s.left_force << ',' << s.right_force << ',' << s.seat_force << ','
         << s.solve_seconds * 1e3 << ',' << s.iterations << ',' << s.fast_iterations << ','
         << (s.truncated ? 1 : 0) << ',' << (s.plan_usable ? 1 : 0) << ',' << s.cost << ','
-        << target.height << ',' << target.velocity.x() << ',' << target.velocity.y() << ','
-        << target.velocity.z() << ',' << target.attitude.x() << ',' << target.attitude.y() << ','
-        << target.attitude.z();
+        << target.height_at(s.time) << ',' << target_velocity.x() << ',' << target_velocity.y()
+        << ',' << target_velocity.z() << ',' << target.attitude.x() << ',' << target.attitude.y()
+        << ',' << target.attitude.z();
     if (A == 1) {
       const Vector3& reach = motion.reach.target;
       out << ',' << s.base.hand.x() << ',' << s.base.hand.y() << ',' << s.base.hand.z() << ','

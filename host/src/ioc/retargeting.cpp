@@ -196,11 +196,11 @@ MotionErrors motion_errors(const humanoid::Motion& targets, const humanoid::Clos
   if (run.samples.empty()) return e;
   for (const humanoid::ClosedLoopSample& s : run.samples) {
     const humanoid::Phase& target = targets.phase_at(s.time);
-    e.height += std::pow(s.base.position.z() - target.height, 2);
+    e.height += std::pow(s.base.position.z() - target.height_at(s.time), 2);
     const Eigen::Vector4d a = humanoid::attitude_quaternion(target.attitude);
     const double cosine = std::min(1.0, std::abs(a.dot(s.base.quaternion)));
     e.attitude += std::pow(2.0 * std::acos(cosine), 2);
-    e.velocity += (s.base.velocity - target.velocity).squaredNorm();
+    e.velocity += (s.base.velocity - target.velocity_at(s.time)).squaredNorm();
     for (int j = 0; j < kLegJoints; ++j)
       e.joints += std::pow(s.state.q[kJointOffset + j] - target.joints[j], 2) / kLegJoints;
   }

@@ -50,10 +50,13 @@ struct InvariantEkfConfig {
   // Leg kinematics' error [m] per axis: link lengths, joint play, the sole's contact point
   // moving under the ankle. Choice: 5 mm.
   double kinematics_noise = 0.005;
-  // The ground is flat at z = 0, as the MPC's contact model has it: a stance point sits at
-  // minus the standing sink of its compliance (humanoid::standing_sink), within ground_noise
-  // [m] (the sink grows in single support and on a sole's edge). It makes the height,
-  // otherwise unobservable like the horizontal position, an estimate instead of a drift.
+  // The ground is flat at z = 0, as the MPC's contact model has it: the centre of a flat
+  // stance sole sits at minus the standing sink of its compliance (humanoid::standing_sink),
+  // within ground_noise [m] (the sink grows in single support). It makes the height, otherwise
+  // unobservable like the horizontal position, an estimate instead of a drift. A foot on an
+  // edge or a corner gives no such measurement: how deep an edge sinks depends on how the load
+  // is shared (a heel edge 12-20 mm deep measured on the slow squat, against 10 mm flat), and
+  // pulling it to the flat sink tilted the estimate.
   humanoid::ContactParameters contact{};
   double ground_noise = 0.01;
   // Two stance feet whose support points move apart faster than slip_speed [m/s] for
@@ -63,14 +66,18 @@ struct InvariantEkfConfig {
   double slip_speed = 0.3;
   int slip_samples = 20;
   // Where a stance foot bears: the mean of its sole's corners (the contact model's four) lying
-  // within support_band [m] of the lowest, in the estimated world: the sole's centre when flat,
-  // an edge's middle when landing on the heel or rolling onto the toes, a corner when on it.
-  // That point, not the one under the ankle, is fixed while the foot rolls; a change of it is
-  // a moved stance point. Choice: 10 mm, the height difference across the 0.23 m foot of a
-  // 2.5 degree tilt: a standing foot rocks that much on the compliant ground (2.5-3.3 degrees
-  // measured under Coarse-Fast standing) and is read as flat; 5 mm read it as on its heels and
-  // left 1.07 degrees of tilt error on standing against 0.92.
-  double support_band = 0.01;
+  // within support_band [m] of the lowest, in the estimated world (a corner that left rejoins
+  // within support_rejoin): the sole's centre when flat, an edge's middle when landing on the
+  // heel or rolling onto the toes, a corner when on it. That point, not the one under the
+  // ankle, is fixed while the foot rolls; a change of it moves the stance point along the sole.
+  // Choices: on the compliant ground (1 cm standing sink) a loaded sole rocks about its centre
+  // with every corner pressed in, its heel and toe up to 20 mm apart on the slow squat, so
+  // 30 mm (7.5 degrees across the 0.23 m foot) before a corner counts as lifted; 15 mm to
+  // rejoin, because a rule without this hysteresis toggled between flat and heels every 10 ms
+  // there and each toggle ratcheted the attitude (3 degrees of tilt error; 10 mm with 5 mm:
+  // 1.5 degrees on standing).
+  double support_band = 0.03;
+  double support_rejoin = 0.015;
   // A stance foot whose kinematic innovation's squared Mahalanobis distance exceeds this is not
   // used in that sample (a slip the speed test has not confirmed yet, a heel strike's bounce):
   // 16.3 is the chi-square distribution's 99.9 % point for 3 degrees of freedom.

@@ -29,14 +29,19 @@
 //              attitude  roll phi, pitch theta, yaw xi [rad]
 //              height    p_z [m]
 //              velocity  v_x v_y v_z [m/s]
+//              squat     (optional) a sinusoidal height, the thesis's slow squat (Sec. 2.7.3):
+//                        depth [m] and period [s] (> 0); the height target is then
+//                        p_z(t) = height - depth (1 - cos(2 pi (t - start) / period)) / 2,
+//                        down from `height` and back each period, starting at rest, and its
+//                        rate is added to v_z
 //   [reach]    (optional, at most once) whole-body reaching, Eq. 2.53: the motion runs on the
 //              robot with a right arm (n = 31, model.hpp)
 //              target    p_reach, world [m]
 //              start     time the reaching term switches on [s] (>= 0)
 //              w_reach   Eq. 2.53's weight
 //              w_SFE     W_control of Eq. 4.24 for the shoulder joint
-// Every key but model_substep is required exactly once per section; weights are finite and
-// >= 0. Any error throws MotionFileError naming the file, the line and the key.
+// Every key but model_substep and squat is required exactly once per section; weights are
+// finite and >= 0. Any error throws MotionFileError naming the file, the line and the key.
 #pragma once
 
 #include <Eigen/Core>
@@ -101,6 +106,11 @@ struct Phase {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // [m/s]
   // The legs' joint angles for CostWeights::joint (left leg first, LegJoint order) [rad].
   std::array<double, 8> joints{};
+  double squat_depth = 0.0, squat_period = 0.0;  // [m], [s]; period 0: no squat
+
+  // The targets at time t (within this phase): height and velocity with the squat.
+  double height_at(double t) const;
+  Eigen::Vector3d velocity_at(double t) const;
 };
 
 // Fixed capacity, so a problem holds its motion by value without allocating. Table 2.3's
