@@ -119,6 +119,8 @@ Errors run_filter(const Recording& r, double rest_seconds) {
     filter.propagate(r.imu[k], kDt);
     filter.correct(r.angles[k], r.rates[k], r.stance[k]);
     e = filter.estimate();
+    // The targets hold while in contact: a flight phase has no measurement but the IMU.
+    if (!r.stance[k][0] && !r.stance[k][1]) continue;
     const State& x = r.truth[k];
     const Eigen::Quaterniond q(x.q[3], x.q[4], x.q[5], x.q[6]);
     const Vector3 velocity = q * x.v.segment<3>(3);
@@ -157,7 +159,7 @@ void print(const char* what, const Errors& e) {
 }
 
 // The targets the MPC needs (our choice): height within 1 cm, horizontal velocity within
-// 0.05 m/s, tilt within 1 degree, RMS while in contact.
+// 0.05 m/s, tilt within 1 degree, RMS while in contact (run_filter's RMS).
 void expect_within_targets(const Errors& e) {
   EXPECT_LT(e.height_rms, 0.01);
   EXPECT_LT(e.horizontal_velocity_rms, 0.05);
@@ -353,18 +355,22 @@ TEST(InvariantEkf, GarbageInputNeverMakesTheEstimateNonFinite) {
   }
 }
 
-// Walking and a jump land on heels and roll onto toes. The filter does not yet meet the targets
-// there (README: State estimation); this checks that it stays with the robot instead of
-// diverging, an order of magnitude above the targets: taking the sole's centre as the contact
-// whatever the foot's tilt lost the jump entirely (0.29 m height, 30 m/s velocity, 46 degrees
-// tilt RMS).
-TEST(InvariantEkf, StaysWithTheRobotThroughStepsAndALanding) {
+// Walking and a jump land on heels and roll onto toes; the jump has a flight phase. Height and
+// velocity within the targets. Tilt within the target plus what no filter can see at the
+// start: the accelerometer's horizontal power-up offset b reads at rest as a tilt of
+// atan(|b_xy| / g) (BMI088: 20 mg, 1.15 degrees per axis), which only motion reveals, slowly
+// on a straight walk (its yaw never turns the offset against gravity).
+TEST(InvariantEkf, WalkingAndALowJumpMeetTheTargets) {
   for (const char* motion : {"II-walking", "V-low-jump"}) {
-    const Errors e = run_filter(record(motion, 6.0, 22), kRestSeconds);
+    SCOPED_TRACE(motion);
+    const Recording r = record(motion, 6.0, 22);
+    const Errors e = run_filter(r, kRestSeconds);
     print(motion, e);
-    EXPECT_LT(e.height_rms, 0.1) << motion;
-    EXPECT_LT(e.horizontal_velocity_rms, 0.5) << motion;
-    EXPECT_LT(e.tilt_rms, 10.0 * M_PI / 180) << motion;
+    const double hidden = std::atan(r.accelerometer_bias.front().head<2>().norm() / 9.81);
+    std::printf("%s: the offset's hidden tilt %.3f deg\n", motion, hidden * 180 / M_PI);
+    EXPECT_LT(e.height_rms, 0.01);
+    EXPECT_LT(e.horizontal_velocity_rms, 0.05);
+    EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180 + hidden);
   }
 }
 
