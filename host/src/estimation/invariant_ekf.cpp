@@ -142,6 +142,7 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
   same_readings_ = 0;
   degraded_samples_ = 0;
   lost_ = false;
+  on_ground_ = {true, true};
   initialized_ = true;
 }
 
@@ -257,6 +258,15 @@ void InvariantEkf::anchor_swing_foot(int foot) {
 
 void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& joint_rates,
                            const std::array<bool, kFeet>& stance) {
+  correct_checked(joint_angles, joint_rates, &stance);
+}
+
+void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& joint_rates) {
+  correct_checked(joint_angles, joint_rates, nullptr);
+}
+
+void InvariantEkf::correct_checked(const JointVector& joint_angles, const JointVector& joint_rates,
+                                   const std::array<bool, kFeet>* stance) {
   if (!initialized_) return;
   if (!joint_angles.allFinite() || !joint_rates.allFinite()) {
     ++rejected_.joints_not_finite;
@@ -274,7 +284,7 @@ void InvariantEkf::correct(const JointVector& joint_angles, const JointVector& j
 
 void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
                                      const JointVector& joint_rates,
-                                     const std::array<bool, kFeet>& stance) {
+                                     const std::array<bool, kFeet>* asked) {
   leg_kinematics(joint_angles, joint_rates);
   // Which feet are used as fixed: asked to stand, and not sliding. A foot's velocity relative
   // to the IMU is w x FK plus the leg's own motion; in double support the two feet's relative
@@ -289,7 +299,11 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
     support[foot] = support_corners(foot);
     foot_[foot] = mean_of_corners(foot, support[foot], &foot_velocity_[foot]);
     relative[foot] = rotation_ * (last_rate_.cross(foot_[foot]) + foot_velocity_[foot]);
+    const double height = position_.z() + rotation_.row(2).dot(foot_[foot]);
+    on_ground_[foot] =
+        height < (on_ground_[foot] ? config_.liftoff_height : config_.touchdown_height);
   }
+  const std::array<bool, kFeet>& stance = asked != nullptr ? *asked : on_ground_;
   const bool both = stance[0] && stance[1];
   const bool apart = both && (relative[0] - relative[1]).norm() > config_.slip_speed;
   const int faster = (velocity_ + relative[0]).norm() > (velocity_ + relative[1]).norm() ? 0 : 1;

@@ -81,6 +81,14 @@ struct InvariantEkfConfig {
   // 1.5 degrees on standing).
   double support_band = 0.03;
   double support_rejoin = 0.015;
+  // Contact from the legs alone (correct() without stance flags; no force sensors): a foot
+  // touches down once its support point, placed by the estimate and the joint angles, is
+  // below touchdown_height [m] and lifts off once it rises above liftoff_height. Choices: a
+  // loaded sole sits 10 mm deep (standing sink), so 5 mm above the surface admits the height
+  // estimate's error at touchdown (5 mm RMS on walking); 15 mm for lift-off, hysteresis
+  // against that error and well below a step's 7 cm swing (motion II).
+  double touchdown_height = 0.005;
+  double liftoff_height = 0.015;
   // A stance foot whose kinematic innovation's squared Mahalanobis distance exceeds this is not
   // used in that sample (a slip the speed test has not confirmed yet, a heel strike's bounce):
   // 16.3 is the chi-square distribution's 99.9 % point for 3 degrees of freedom.
@@ -182,8 +190,10 @@ class InvariantEkf {
   void propagate(const sensors::ImuReading& imu, double dt);
   // The leg kinematics of this sample; `stance` says which feet the caller takes as standing.
   // A sample with a non-finite angle or rate is skipped.
+  // Without `stance`, which feet stand is inferred from the legs (touchdown_height).
   void correct(const JointVector& joint_angles, const JointVector& joint_rates,
                const std::array<bool, kFeet>& stance);
+  void correct(const JointVector& joint_angles, const JointVector& joint_rates);
 
   BaseEstimate estimate() const;
   const Covariance& covariance() const { return covariance_; }
@@ -202,9 +212,11 @@ class InvariantEkf {
   void anchor_swing_foot(int foot);
   // One step of the IMU's process model with bias-corrected rate w and force a.
   void integrate(const Vector3& w, const Vector3& a, double dt);
-  // The correction with finite joint readings.
+  // The correction with finite joint readings; `stance` null: inferred from the legs.
+  void correct_checked(const JointVector& joint_angles, const JointVector& joint_rates,
+                       const std::array<bool, kFeet>* stance);
   void correct_with_legs(const JointVector& joint_angles, const JointVector& joint_rates,
-                         const std::array<bool, kFeet>& stance);
+                         const std::array<bool, kFeet>* stance);
 
   // The estimate before an update, restored if the update made it non-finite.
   struct Snapshot {
@@ -241,6 +253,7 @@ class InvariantEkf {
   std::array<int, kFeet> fast_samples_{};  // in a row above slip_speed
   std::array<bool, kFeet> gated_{};
   std::array<std::uint8_t, kFeet> support_{};
+  std::array<bool, kFeet> on_ground_{};  // inferred from the legs
   Covariance covariance_ = Covariance::Identity();
 
   sensors::ImuReading last_reading_{};  // the last finite one, to find a stuck sensor
