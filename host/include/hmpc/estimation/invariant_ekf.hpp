@@ -212,11 +212,11 @@ class InvariantEkf {
   void anchor_swing_foot(int foot);
   // One step of the IMU's process model with bias-corrected rate w and force a.
   void integrate(const Vector3& w, const Vector3& a, double dt);
-  // The correction with finite joint readings; `stance` null: inferred from the legs.
+  // The correction with finite joint readings; null stance flags: inferred from the legs.
   void correct_checked(const JointVector& joint_angles, const JointVector& joint_rates,
                        const std::array<bool, kFeet>* stance);
   void correct_with_legs(const JointVector& joint_angles, const JointVector& joint_rates,
-                         const std::array<bool, kFeet>* stance);
+                         const std::array<bool, kFeet>* asked);
 
   // The estimate before an update, restored if the update made it non-finite.
   struct Snapshot {
