@@ -1,6 +1,7 @@
 // hmpc-humanoid: runs a humanoid motion (Tables 2.2-2.3) in closed loop under a chosen MPC of
 // Table 2.4 on the 1 ms simulator, prints its figures and writes its log and pictures
 // (trajectory.csv, filmstrip.png, base.png; viewing.hpp).
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -15,6 +16,7 @@ namespace {
 using namespace hmpc::humanoid;
 
 constexpr int kFellStatus = 3;
+constexpr int kLostStatus = 4;
 
 void usage(std::FILE* out) {
   std::fprintf(
@@ -34,9 +36,16 @@ void usage(std::FILE* out) {
       "  --no-truncate       let a solve run past the 30 ms sampling time\n"
       "  --initial-velocity VX,VY,VZ  the whole robot moving at the start [m/s], world,\n"
       "                      at most 1 m/s (default: at rest)\n"
+      "  --estimator NAME    what the MPC solves from: truth (the simulator's state,\n"
+      "                      default) or invariant-ekf (the estimate from a simulated\n"
+      "                      BMI088 IMU and the joint encoders, after a 0.5 s rest;\n"
+      "                      biped motions, started at rest); writes estimation.csv\n"
+      "                      and estimation.png\n"
+      "  --sensor-seed N     the simulated sensors' noise and biases, 0..2^31 (default 1)\n"
       "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
-      "ground), 2 bad arguments or motion file, 1 the log or pictures could not be written\n",
-      kFellStatus);
+      "ground), %d the estimate was lost (the MPC stopped), 2 bad arguments or motion\n"
+      "file, 1 the log or pictures could not be written\n",
+      kFellStatus, kLostStatus);
 }
 
 // The run on the biped (A = 0) or, for a reaching motion, the robot with an arm (A = 1).
@@ -62,6 +71,18 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
     std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n",
                 run.fell_at, config.fallen_clearance);
   }
+  if (config.feedback != StateFeedback::kTruth) {
+    const FeedbackErrors e = feedback_errors(run);
+    std::printf(
+        "%s estimate against the truth, RMS over the samples: torso height %.2f mm, "
+        "horizontal velocity %.4f m/s, tilt %.3f deg; degraded in %d of %zu samples\n",
+        name_of(config.feedback), 1e3 * e.height_rms, e.horizontal_velocity_rms,
+        e.tilt_rms * 180.0 / 3.141592653589793, e.degraded, run.samples.size());
+  }
+  if (run.estimate_lost()) {
+    std::printf("the estimate was LOST at %.2f s: the MPC stopped (a robot's boards would hold)\n",
+                run.estimate_lost_at);
+  }
 
   if constexpr (A == 1) {
     const PhysicalCheck check = check_reaching(motion, run);
@@ -81,8 +102,9 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
     std::fprintf(stderr, "hmpc-humanoid: %s\n", error.c_str());
     return 1;
   }
-  std::printf("wrote %s/trajectory.csv, filmstrip.png, base.png\n", out.c_str());
-  return run.fell() ? kFellStatus : 0;
+  std::printf("wrote %s/trajectory.csv, filmstrip.png, base.png%s\n", out.c_str(),
+              config.feedback == StateFeedback::kTruth ? "" : ", estimation.csv, estimation.png");
+  return run.fell() ? kFellStatus : run.estimate_lost() ? kLostStatus : 0;
 }
 }  // namespace
 
@@ -124,6 +146,13 @@ int main(int argc, char** argv) {
                ? hmpc::cli::bad_value("--initial-velocity", what, v)
                : std::string();
   });
+  parser.text("--estimator", [&](const std::string& v) {
+    return parse_state_feedback(v, config.feedback)
+               ? std::string()
+               : hmpc::cli::bad_value("--estimator", "truth or invariant-ekf", v);
+  });
+  int seed = 1;
+  parser.integer("--sensor-seed", 0, 2147483647, seed);
   parser.flag("--no-warm-start", no_warm_start);
   parser.flag("--no-truncate", no_truncate);
   std::string error;
@@ -136,6 +165,7 @@ int main(int argc, char** argv) {
     return hmpc::cli::exit_status(outcome, "hmpc-humanoid", error, usage);
   }
   config.warm_start = !no_warm_start;
+  config.sensors.seed = static_cast<std::uint64_t>(seed);
   config.truncate = !no_truncate;
 
   Motion motion;
@@ -147,8 +177,17 @@ int main(int argc, char** argv) {
   }
   const std::string stem =
       std::filesystem::path(motion_path(motion_name, HMPC_HUMANOID_MOTIONS)).stem().string();
-  if (out.empty()) out = "humanoid-" + stem + "-" + name_of(config.mpc);
+  if (out.empty()) {
+    out = "humanoid-" + stem + "-" + name_of(config.mpc);
+    if (config.feedback != StateFeedback::kTruth) out += std::string("-") + name_of(config.feedback);
+  }
 
+  if (config.feedback != StateFeedback::kTruth &&
+      (motion.reach.active || !config.initial_velocity.isZero())) {
+    std::fprintf(stderr, "hmpc-humanoid: --estimator %s needs a biped motion started at rest\n",
+                 name_of(config.feedback));
+    return 2;
+  }
   return motion.reach.active ? run_and_report<1>(motion, config, stem, out, frames)
                              : run_and_report<0>(motion, config, stem, out, frames);
 }

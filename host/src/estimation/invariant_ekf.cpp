@@ -430,13 +430,21 @@ bool InvariantEkf::finite() const {
 
 Trust InvariantEkf::trust() const {
   if (!initialized_ || lost_) return Trust::kLost;
-  // Tilt: the attitude error's horizontal part (world axes x, y); velocity: its horizontal part.
-  const double tilt = std::sqrt(covariance_(kPhi, kPhi) + covariance_(kPhi + 1, kPhi + 1));
-  const double speed = std::sqrt(covariance_(kV, kV) + covariance_(kV + 1, kV + 1));
-  if (tilt > config_.trusted_tilt_sigma || speed > config_.trusted_velocity_sigma) {
+  const Spread s = spread();
+  if (s.tilt > config_.trusted_tilt_sigma ||
+      s.horizontal_velocity > config_.trusted_velocity_sigma) {
     return Trust::kLost;
   }
   return degraded_samples_ > 0 ? Trust::kDegraded : Trust::kTracking;
+}
+
+Spread InvariantEkf::spread() const {
+  // The right-invariant error's blocks are in world axes: their diagonal, summed per direction.
+  Spread s;
+  s.height = std::sqrt(covariance_(kP + 2, kP + 2));
+  s.horizontal_velocity = std::sqrt(covariance_(kV, kV) + covariance_(kV + 1, kV + 1));
+  s.tilt = std::sqrt(covariance_(kPhi, kPhi) + covariance_(kPhi + 1, kPhi + 1));
+  return s;
 }
 
 const char* to_string(Trust trust) {
@@ -462,6 +470,7 @@ BaseEstimate InvariantEkf::estimate() const {
   e.slipping = slipping_;
   e.gated = gated_;
   for (int foot = 0; foot < kFeet; ++foot) e.support[foot] = stance_[foot] ? support_[foot] : 0;
+  e.spread = spread();
   e.trust = trust();
   return e;
 }

@@ -10,8 +10,23 @@ namespace hmpc::humanoid {
 namespace {
 
 constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
+constexpr const char* kFeedbackNames[kStateFeedbacks] = {"truth", "invariant-ekf"};
 
 }  // namespace
+
+const char* name_of(StateFeedback feedback) {
+  return kFeedbackNames[static_cast<int>(feedback)];
+}
+
+bool parse_state_feedback(const std::string& name, StateFeedback& feedback) {
+  for (int i = 0; i < kStateFeedbacks; ++i) {
+    if (name == kFeedbackNames[i]) {
+      feedback = static_cast<StateFeedback>(i);
+      return true;
+    }
+  }
+  return false;
+}
 
 const char* name_of(MpcKind kind) { return kNames[static_cast<int>(kind)]; }
 
@@ -42,6 +57,17 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   }
   if (!(config.start_height > 0.3 && config.start_height < 1.5)) {
     throw std::invalid_argument("closed loop: the start height must be within 0.3..1.5 m");
+  }
+  if (config.feedback != StateFeedback::kTruth) {
+    if (A != 0) {
+      throw std::invalid_argument("closed loop: the estimator knows the biped, not the arm robot");
+    }
+    if (!config.initial_velocity.isZero()) {
+      throw std::invalid_argument("closed loop: the estimator starts from a robot at rest");
+    }
+    if (!(config.rest_seconds >= 0.01 && config.rest_seconds <= 10.0)) {
+      throw std::invalid_argument("closed loop: the estimator's rest must be within 0.01..10 s");
+    }
   }
   ThreadPool pool(config.threads);
   ThreadPool* workers = config.threads > 1 ? &pool : nullptr;
@@ -89,9 +115,38 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   return s;
 }
 
+template <int A>
+FeedbackErrors feedback_errors(const BasicClosedLoopRun<A>& run) {
+  FeedbackErrors e;
+  if (run.samples.empty()) return e;
+  double height2 = 0.0, velocity2 = 0.0, tilt2 = 0.0;
+  const BasicState<A>* truth = &run.initial;  // at the first period's start
+  for (const BasicClosedLoopSample<A>& sample : run.samples) {
+    const BasicState<A>& fed = sample.feedback;
+    const Eigen::Quaterniond q(truth->q[3], truth->q[4], truth->q[5], truth->q[6]);
+    const Eigen::Quaterniond q_fed(fed.q[3], fed.q[4], fed.q[5], fed.q[6]);
+    height2 += std::pow(fed.q[2] - truth->q[2], 2);
+    // v's linear part is in torso coordinates (model.hpp).
+    const Vector3 velocity = q * truth->v.template segment<3>(3);
+    const Vector3 velocity_fed = q_fed * fed.v.template segment<3>(3);
+    velocity2 += (velocity_fed - velocity).template head<2>().squaredNorm();
+    const double cosine = (q * Vector3::UnitZ()).dot(q_fed * Vector3::UnitZ());
+    tilt2 += std::pow(std::acos(std::clamp(cosine, -1.0, 1.0)), 2);
+    e.degraded += sample.trust == estimation::Trust::kDegraded ? 1 : 0;
+    truth = &sample.state;
+  }
+  const double n = static_cast<double>(run.samples.size());
+  e.height_rms = std::sqrt(height2 / n);
+  e.horizontal_velocity_rms = std::sqrt(velocity2 / n);
+  e.tilt_rms = std::sqrt(tilt2 / n);
+  return e;
+}
+
 template ClosedLoopRun run_closed_loop<0>(const Motion&, const ClosedLoopConfig&);
 template ArmClosedLoopRun run_closed_loop<1>(const Motion&, const ClosedLoopConfig&);
 template ClosedLoopSummary summarise(const ClosedLoopRun&);
 template ClosedLoopSummary summarise(const ArmClosedLoopRun&);
+template FeedbackErrors feedback_errors(const ClosedLoopRun&);
+template FeedbackErrors feedback_errors(const ArmClosedLoopRun&);
 
 }  // namespace hmpc::humanoid

@@ -8,7 +8,9 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 
+#include "hmpc/estimation/biped_state_estimator.hpp"
 #include "hmpc/humanoid/closed_loop.hpp"
 #include "hmpc/mpc/deadline_stop.hpp"
 #include "hmpc/mpc/receding_horizon_mpc.hpp"
@@ -144,6 +146,59 @@ void add_vertical_forces(const BasicContactState<A>& contact, double weight,
   }
 }
 
+// What the MPC is given (ClosedLoopConfig::feedback): the truth, or the biped's estimator on its
+// simulated sensors, which read the plant every simulator step.
+template <int A>
+class Feedback {
+ public:
+  Feedback(const ClosedLoopConfig& config, const BasicModel<A>& model,
+           const BasicState<A>& initial) {
+    if constexpr (A == 0) {
+      if (config.feedback == StateFeedback::kTruth) return;
+      sensors_.emplace(model, config.sensors);
+      estimator_.emplace(config.problem.parameters);
+      // The robot held still in its starting stance: nothing moves, gravity alone is felt.
+      sensors_->start_at_rest(initial.q);
+      const BasicVelocity<A> still = BasicVelocity<A>::Zero();
+      const int samples = static_cast<int>(std::lround(config.rest_seconds / kSimulatorStep));
+      for (int k = 0; k < samples; ++k) {
+        estimator_->rest(sensors_->measure(initial.q, still, still), kSimulatorStep);
+      }
+      estimator_->start();
+    }
+  }
+
+  // One simulator step that ended at `x` after the mean acceleration `a`.
+  void step(const BasicState<A>& x, const BasicVelocity<A>& a) {
+    if constexpr (A == 0) {
+      if (estimator_) estimator_->update(sensors_->measure(x.q, x.v, a), kSimulatorStep);
+    }
+  }
+
+  // What the MPC solves from now, the plant being at `truth`.
+  BasicState<A> state(const BasicState<A>& truth) const {
+    if constexpr (A == 0) {
+      if (estimator_) return estimator_->state();
+    }
+    return truth;
+  }
+
+  // The same, with its spread and trust, into `sample`.
+  void give(const BasicState<A>& truth, BasicClosedLoopSample<A>& sample) const {
+    sample.feedback = state(truth);
+    if constexpr (A == 0) {
+      if (!estimator_) return;
+      const estimation::BaseEstimate e = estimator_->filter().estimate();
+      sample.spread = e.spread;
+      sample.trust = e.trust;
+    }
+  }
+
+ private:
+  std::optional<BipedSensors> sensors_;
+  std::optional<estimation::BipedStateEstimator> estimator_;
+};
+
 template <class Mpc, int A>
 BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopConfig& config,
                                const BasicState<A>& initial, double duration) {
@@ -159,9 +214,11 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   constexpr int kSimulatorSteps =
       static_cast<int>(kFastStep / kSimulatorStep + 0.5);  // NOLINT(bugprone-incorrect-roundings)
 
-  if (config.warm_start) mpc.initialize(to_vector(initial), kOfflineIterations);
+  Feedback<A> feedback(config, model, initial);
+  if (config.warm_start) mpc.initialize(to_vector(feedback.state(initial)), kOfflineIterations);
   BasicClosedLoopRun<A> run;
   run.initial = initial;
+  run.feedback = config.feedback;
   const int count = static_cast<int>(std::lround(duration / kSamplingPeriod));
   run.samples.reserve(count);
   if (config.record_milliseconds) {
@@ -171,10 +228,15 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   LayerTimes times;
   for (int k = 0; k < count; ++k) {
     const double t0 = k * kSamplingPeriod;
+    BasicClosedLoopSample<A> sample;
+    feedback.give(x, sample);
+    if (sample.trust == estimation::Trust::kLost) {
+      run.estimate_lost_at = t0;
+      break;
+    }
     problem_of(mpc).set_start_time(t0);
     const auto start = Clock::now();
-    update(mpc, x, start, config.truncate, times);
-    BasicClosedLoopSample<A> sample;
+    update(mpc, sample.feedback, start, config.truncate, times);
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);
     sample.torque = mpc.planned_control(0);
@@ -185,10 +247,11 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
         sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
                        (kSimulatorStep / kCoarseStep);
         const State next = simulator.step(x, u, kSimulatorStep);
+        const BasicVelocity<A> acceleration = (next.v - x.v) / kSimulatorStep;
         if (config.record_milliseconds) {
-          run.milliseconds.push_back(
-              {t + kSimulatorStep, next, (next.v - x.v) / kSimulatorStep, u});
+          run.milliseconds.push_back({t + kSimulatorStep, next, acceleration, u});
         }
+        feedback.step(next, acceleration);
         x = next;
         add_vertical_forces(simulator.contact_state(), 1.0 / (kFineSteps * kSimulatorSteps),
                             sample);

@@ -1,6 +1,7 @@
 #include "hmpc/humanoid/viewing.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -140,6 +141,45 @@ void write_trajectory_csv(std::ostream& out, const Motion& motion,
   }
 }
 
+namespace {
+
+// Roll and pitch [rad] of the torso (Z-Y-X Euler angles, which do not depend on the yaw).
+template <int A>
+Eigen::Vector2d roll_pitch(const BasicState<A>& x) {
+  const Eigen::Quaterniond q(x.q[3], x.q[4], x.q[5], x.q[6]);
+  const Vector3 up = q.conjugate() * Vector3::UnitZ();  // world's up in torso coordinates
+  return {std::atan2(up.y(), up.z()), -std::asin(std::clamp(up.x(), -1.0, 1.0))};
+}
+
+// Horizontal velocity of the torso origin, world (v's linear part is in torso coordinates).
+template <int A>
+Eigen::Vector2d horizontal_velocity(const BasicState<A>& x) {
+  const Eigen::Quaterniond q(x.q[3], x.q[4], x.q[5], x.q[6]);
+  return (q * x.v.template segment<3>(3)).template head<2>();
+}
+
+}  // namespace
+
+template <int A>
+void write_estimation_csv(std::ostream& out, const BasicClosedLoopRun<A>& run) {
+  out << "time,true_z,estimated_z,sigma_z,true_vx,true_vy,estimated_vx,estimated_vy,"
+         "sigma_horizontal_v,true_roll,true_pitch,estimated_roll,estimated_pitch,sigma_tilt,"
+         "trust\n";
+  out.precision(9);
+  const BasicState<A>* truth = &run.initial;  // at the first period's start
+  double time = 0.0;
+  for (const BasicClosedLoopSample<A>& s : run.samples) {
+    const Eigen::Vector2d v = horizontal_velocity(*truth), v_fed = horizontal_velocity(s.feedback);
+    const Eigen::Vector2d a = roll_pitch(*truth), a_fed = roll_pitch(s.feedback);
+    out << time << ',' << truth->q[2] << ',' << s.feedback.q[2] << ',' << s.spread.height << ','
+        << v.x() << ',' << v.y() << ',' << v_fed.x() << ',' << v_fed.y() << ','
+        << s.spread.horizontal_velocity << ',' << a.x() << ',' << a.y() << ',' << a_fed.x() << ','
+        << a_fed.y() << ',' << s.spread.tilt << ',' << static_cast<int>(s.trust) << '\n';
+    truth = &s.state;
+    time = s.time;
+  }
+}
+
 template <int A>
 bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
                const BasicClosedLoopRun<A>& run, int frames, std::string& error) {
@@ -219,6 +259,32 @@ bool write_run(const std::string& dir, const std::string& title, const Motion& m
        << "unset multiplot\n";
     if (!gp) return fail(error, "cannot write " + script.string());
   }
+  if (run.feedback != StateFeedback::kTruth) {
+    {
+      std::ofstream csv(base / "estimation.csv");
+      write_estimation_csv(csv, run);
+      if (!csv) return fail(error, "cannot write " + (base / "estimation.csv").string());
+    }
+    std::ofstream gp(script, std::ios::app);
+    gp << "set terminal pngcairo size 900,900 noenhanced\nset output 'estimation.png'\n"
+       << "set multiplot layout 3,1 title '" << title << ": " << name_of(run.feedback)
+       << " against the truth'\nunset xlabel\n"
+       << "set ylabel 'torso height [m]'\nplot 'estimation.csv' using 1:($3-2*$4):($3+2*$4) "
+          "with filledcurves fc rgb '#cfd8ea' title 'estimate +-2 sigma', '' using 1:2 with "
+          "lines lw 2 lc rgb 'black' title 'truth', '' using 1:3 with lines lw 1 lc rgb "
+          "'#1f4e99' title 'estimate'\n"
+       << "set ylabel 'horizontal velocity [m/s]'\nplot 'estimation.csv' using 1:5 with lines "
+          "lw 2 lc rgb 'black' title 'v_x truth', '' using 1:7 with lines lc rgb '#1f4e99' "
+          "title 'v_x estimate', '' using 1:6 with lines lw 2 lc rgb 'gray' title 'v_y truth', "
+          "'' using 1:8 with lines lc rgb '#99321f' title 'v_y estimate'\n"
+       << "set xlabel 'time [s]'\nset ylabel 'tilt [deg]'\nplot 'estimation.csv' using "
+          "1:($10*180/pi) with lines lw 2 lc rgb 'black' title 'roll truth', '' using "
+          "1:($12*180/pi) with lines lc rgb '#1f4e99' title 'roll estimate', '' using "
+          "1:($11*180/pi) with lines lw 2 lc rgb 'gray' title 'pitch truth', '' using "
+          "1:($13*180/pi) with lines lc rgb '#99321f' title 'pitch estimate'\n"
+       << "unset multiplot\n";
+    if (!gp) return fail(error, "cannot write " + script.string());
+  }
   const std::string command = "cd '" + dir + "' && gnuplot humanoid.gp 2> gnuplot.log";
   if (std::system(command.c_str()) != 0) {
     return fail(error, "gnuplot failed (see " + (base / "gnuplot.log").string() +
@@ -231,6 +297,8 @@ template StickFigure stick_figure(const BasicState<0>&, const ProblemConfig&);
 template StickFigure stick_figure(const BasicState<1>&, const ProblemConfig&);
 template void write_trajectory_csv(std::ostream&, const Motion&, const BasicClosedLoopRun<0>&);
 template void write_trajectory_csv(std::ostream&, const Motion&, const BasicClosedLoopRun<1>&);
+template void write_estimation_csv(std::ostream&, const BasicClosedLoopRun<0>&);
+template void write_estimation_csv(std::ostream&, const BasicClosedLoopRun<1>&);
 template bool write_run(const std::string&, const std::string&, const Motion&,
                         const BasicClosedLoopRun<0>&, int, std::string&);
 template bool write_run(const std::string&, const std::string&, const Motion&,

@@ -135,6 +135,14 @@ struct RejectedInputs {
   int state_not_finite = 0;  // an update that would have made the estimate non-finite
 };
 
+// One standard deviation of what the MPC needs most, from the covariance: the height, the
+// horizontal velocity and the tilt (the attitude error about the world's x and y axes).
+struct Spread {
+  double height = 0.0;               // [m]
+  double horizontal_velocity = 0.0;  // [m/s]
+  double tilt = 0.0;                 // [rad]
+};
+
 // The robot's base as the MPC needs it: the torso frame's origin and rotation, its velocity in
 // world coordinates and angular velocity in torso coordinates.
 struct BaseEstimate {
@@ -151,6 +159,7 @@ struct BaseEstimate {
   // The sole corners a stance foot bears on (bit c: corner c, hmpc/humanoid/contact.hpp's
   // order heel left, heel right, toe left, toe right; all four: flat).
   std::array<std::uint8_t, kFeet> support{};
+  Spread spread;  // of the IMU frame's state
   Trust trust = Trust::kLost;
 };
 
@@ -197,6 +206,7 @@ class InvariantEkf {
 
   BaseEstimate estimate() const;
   const Covariance& covariance() const { return covariance_; }
+  Spread spread() const;
   bool initialized() const { return initialized_; }
   Trust trust() const;
   const RejectedInputs& rejected() const { return rejected_; }

@@ -14,7 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "hmpc/estimation/invariant_ekf.hpp"
 #include "hmpc/humanoid/coarse_fast.hpp"
+#include "hmpc/humanoid/sensors.hpp"
 
 namespace hmpc::humanoid {
 
@@ -24,6 +26,16 @@ constexpr int kMpcKinds = 3;
 const char* name_of(MpcKind kind);
 // The kind named `name`; false if it names none.
 bool parse_mpc_kind(const std::string& name, MpcKind& kind);
+
+// What the MPC solves from at each sampling instant: the simulator's exact state, as the thesis's
+// simulations had it, or what a robot without force sensors knows: the contact-aided invariant
+// EKF (hmpc/estimation/biped_state_estimator.hpp) on the biped's simulated IMU, encoders and
+// boards' velocities (hmpc/humanoid/sensors.hpp).
+enum class StateFeedback { kTruth, kInvariantEkf };
+constexpr int kStateFeedbacks = 2;
+// "truth", "invariant-ekf".
+const char* name_of(StateFeedback feedback);
+bool parse_state_feedback(const std::string& name, StateFeedback& feedback);
 
 // Table 2.4's Fine MPC.
 constexpr double kFineStep = 0.010;
@@ -61,6 +73,13 @@ struct ClosedLoopConfig {
   // Keep every 1 ms simulator step (BasicClosedLoopRun::milliseconds): recorded truth for the
   // state estimator's sensors and checks.
   bool record_milliseconds = false;
+  StateFeedback feedback = StateFeedback::kTruth;
+  // With an estimator: its sensors, and how long the robot is held still in its starting
+  // stance before the MPC takes over, the rest that starts the filter (attitude from gravity,
+  // gyroscope bias from the mean rate). Choice: 0.5 s averages the gyroscope's white noise to
+  // 0.02 deg/s, a fiftieth of its power-up bias.
+  SensorConfig sensors{};
+  double rest_seconds = 0.5;
   ProblemConfig problem{};
 };
 
@@ -91,6 +110,11 @@ struct BasicClosedLoopSample {
   int fast_iterations = 0;     // Coarse-Fast's lower layer's
   bool plan_usable = false;
   bool truncated = false;  // the solve was stopped at the sampling time
+  // What the MPC solved from at the period's start (the state itself with StateFeedback::kTruth)
+  // and, with an estimator, its spread and trust then.
+  BasicState<A> feedback;
+  estimation::Spread spread;
+  estimation::Trust trust = estimation::Trust::kTracking;
   // Sec. 4.3.1's running cost l(x, u, t) integrated over the period on the 1 ms simulator,
   // in units of coarse steps (divided by 30 ms), so that a period adds what one coarse-step
   // term of the MPC's objective would.
@@ -102,8 +126,13 @@ struct BasicClosedLoopRun {
   std::vector<BasicClosedLoopSample<A>> samples;
   std::vector<BasicSimulatorStep<A>> milliseconds;  // with ClosedLoopConfig::record_milliseconds
   BasicState<A> initial;
+  StateFeedback feedback = StateFeedback::kTruth;  // what the MPC solved from
   double fell_at = -1.0;  // [s] the sample where the run ended early (see fallen_height), or -1
+  // [s] the sampling instant where the estimator said its estimate was lost, or -1: the run ends
+  // there, as a controller would stop its MPC and leave the robot to the boards' posture hold.
+  double estimate_lost_at = -1.0;
   bool fell() const { return fell_at >= 0.0; }
+  bool estimate_lost() const { return estimate_lost_at >= 0.0; }
 };
 using ClosedLoopSample = BasicClosedLoopSample<0>;
 using ClosedLoopRun = BasicClosedLoopRun<0>;
@@ -113,7 +142,9 @@ using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 // Runs `motion` from standing_state at ClosedLoopConfig::start_height, on the biped (A = 0) or, for
 // a reaching motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument
 // for a negative or non-finite duration, threads outside 1..64, an iteration cap outside 0..1000, a
-// start height outside 0.3..1.5 m, or a motion that needs the other robot.
+// start height outside 0.3..1.5 m, or a motion that needs the other robot; with an estimator,
+// for the robot with an arm (the estimator knows the biped), a moving start, or a rest outside
+// 0.01..10 s.
 template <int A = 0>
 BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
 
@@ -129,5 +160,15 @@ struct ClosedLoopSummary {
 };
 template <int A>
 ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run);
+
+// How far what the MPC solved from was from the truth, RMS over a run's samples (each at its
+// period's start): base height, horizontal velocity (world) and tilt; and the samples whose
+// estimate was degraded.
+struct FeedbackErrors {
+  double height_rms = 0.0, horizontal_velocity_rms = 0.0, tilt_rms = 0.0;  // m, m/s, rad
+  int degraded = 0;
+};
+template <int A>
+FeedbackErrors feedback_errors(const BasicClosedLoopRun<A>& run);
 
 }  // namespace hmpc::humanoid

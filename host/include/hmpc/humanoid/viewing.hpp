@@ -39,12 +39,20 @@ constexpr int kHeightColumn = 4, kVelocityColumn = 5, kQuaternionColumn = 8;
 template <int A>
 constexpr int kTargetHeightColumn = 15 + 2 * Dimensions<A>::kJoints + 10;
 
+// With an estimator in the loop (BasicClosedLoopRun::feedback): one row per 30 ms sample, at the
+// period's start, of the torso origin's height, horizontal velocity (world) and roll and
+// pitch, truth and what the MPC was given, the estimator's 1-sigma spread of height,
+// horizontal velocity and tilt, and its trust (0 tracking, 1 degraded, 2 lost).
+template <int A>
+void write_estimation_csv(std::ostream& out, const BasicClosedLoopRun<A>& run);
+
 // Writes DIR/trajectory.csv, DIR/filmstrip.dat, DIR/humanoid.gp and runs gnuplot for
 // DIR/filmstrip.png (`frames` evenly spaced samples, 2..16) and DIR/base.png. `title` heads
 // the pictures. Returns false (with the reason in `error`) if a file cannot be written or
 // gnuplot fails; the CSV is written first, so it survives a plotting failure.
 // A reaching motion's filmstrip also shows the arm and the target, and base.png the hand's
-// distance to the target.
+// distance to the target. With an estimator also DIR/estimation.csv and DIR/estimation.png
+// (estimate against truth: height with its 2-sigma band, horizontal velocity, roll and pitch).
 template <int A>
 bool write_run(const std::string& dir, const std::string& title, const Motion& motion,
                const BasicClosedLoopRun<A>& run, int frames, std::string& error);
