@@ -179,7 +179,8 @@ int main(int argc, char** argv) {
       std::filesystem::path(motion_path(motion_name, HMPC_HUMANOID_MOTIONS)).stem().string();
   if (out.empty()) {
     out = "humanoid-" + stem + "-" + name_of(config.mpc);
-    if (config.feedback != StateFeedback::kTruth) out += std::string("-") + name_of(config.feedback);
+    if (config.feedback != StateFeedback::kTruth)
+      out += std::string("-") + name_of(config.feedback);
   }
 
   if (config.feedback != StateFeedback::kTruth &&

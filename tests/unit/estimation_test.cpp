@@ -78,8 +78,7 @@ Recording record(const std::string& motion, double seconds, std::uint64_t seed) 
     std::array<double, est::kFeet> load{};
     for (int i = 0; i < kSolePoints; ++i) load[i / kFootPoints] += forces.force[i].z();
     r.stance.push_back({load[0] > kStanceForce, load[1] > kStanceForce});
-    const SensorReadings reading =
-        readings.measure(step.state.q, step.state.v, step.acceleration);
+    const SensorReadings reading = readings.measure(step.state.q, step.state.v, step.acceleration);
     r.imu.push_back(reading.imu);
     r.gyroscope_bias.push_back(readings.imu().gyroscope_bias());
     r.accelerometer_bias.push_back(readings.imu().accelerometer_bias());
@@ -495,8 +494,8 @@ TEST(ClosedLoopThroughTheEstimator, StandingOnTheEstimateStaysUpOnEverySeed) {
         "standing on the estimate, seed %d: height %.2f mm, horizontal velocity %.4f m/s, tilt "
         "%.3f deg RMS; mean iterations %.2f (on the truth: 2); motion I's check %s: %s\n",
         static_cast<int>(seed), 1e3 * e.height_rms, e.horizontal_velocity_rms,
-        e.tilt_rms * 180 / M_PI, summarise(run).mean_iterations,
-        check.passed ? "passed" : "FAILED", check.verdict.c_str());
+        e.tilt_rms * 180 / M_PI, summarise(run).mean_iterations, check.passed ? "passed" : "FAILED",
+        check.verdict.c_str());
   }
 }
 

@@ -14,9 +14,7 @@ constexpr const char* kFeedbackNames[kStateFeedbacks] = {"truth", "invariant-ekf
 
 }  // namespace
 
-const char* name_of(StateFeedback feedback) {
-  return kFeedbackNames[static_cast<int>(feedback)];
-}
+const char* name_of(StateFeedback feedback) { return kFeedbackNames[static_cast<int>(feedback)]; }
 
 bool parse_state_feedback(const std::string& name, StateFeedback& feedback) {
   for (int i = 0; i < kStateFeedbacks; ++i) {

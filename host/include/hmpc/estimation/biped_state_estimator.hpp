@@ -35,8 +35,8 @@ class BipedStateEstimator {
   humanoid::BasicState<0> state() const {
     const BaseEstimate e = filter_.estimate();
     humanoid::BasicState<0> x;
-    x.q << e.position, e.orientation.w(), e.orientation.x(), e.orientation.y(),
-        e.orientation.z(), last_.angles;
+    x.q << e.position, e.orientation.w(), e.orientation.x(), e.orientation.y(), e.orientation.z(),
+        last_.angles;
     // v's linear part is the torso origin's velocity in torso coordinates.
     x.v << e.angular_velocity, e.orientation.conjugate() * e.velocity, last_.rates;
     return x;
