@@ -12,30 +12,30 @@ namespace {
 constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
 constexpr const char* kFeedbackNames[kStateFeedbacks] = {"truth", "invariant-ekf"};
 
-}  // namespace
-
-const char* name_of(StateFeedback feedback) { return kFeedbackNames[static_cast<int>(feedback)]; }
-
-bool parse_state_feedback(const std::string& name, StateFeedback& feedback) {
-  for (int i = 0; i < kStateFeedbacks; ++i) {
-    if (name == kFeedbackNames[i]) {
-      feedback = static_cast<StateFeedback>(i);
+// The enumerator whose name, in `names` (the enumerators' order), is `name`.
+template <class Enum, int N>
+bool parse_name(const char* const (&names)[N], const std::string& name, Enum& out) {
+  for (int i = 0; i < N; ++i) {
+    if (name == names[i]) {
+      out = static_cast<Enum>(i);
       return true;
     }
   }
   return false;
 }
 
+}  // namespace
+
+const char* name_of(StateFeedback feedback) { return kFeedbackNames[static_cast<int>(feedback)]; }
+
+bool parse_state_feedback(const std::string& name, StateFeedback& feedback) {
+  return parse_name(kFeedbackNames, name, feedback);
+}
+
 const char* name_of(MpcKind kind) { return kNames[static_cast<int>(kind)]; }
 
 bool parse_mpc_kind(const std::string& name, MpcKind& kind) {
-  for (int i = 0; i < kMpcKinds; ++i) {
-    if (name == kNames[i]) {
-      kind = static_cast<MpcKind>(i);
-      return true;
-    }
-  }
-  return false;
+  return parse_name(kNames, name, kind);
 }
 
 template <int A>
