@@ -517,9 +517,13 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
     EXPECT_TRUE(saw_run) << "the board did not reach run though the bus kept its pace";
     EXPECT_EQ(fault_bits, 0u);
   }
-  EXPECT_EQ(fault_bits & ~unsigned(proto::fault::kSensorTimeout | proto::fault::kHeartbeatTimeout),
-            0u)
-      << "a fault other than a watchdog's";
+  // Whatever the machine did, the solver itself never fails here. A stall may trip a watchdog
+  // or, when it falls in MPC steps, make enough of them in a row miss their deadline that the
+  // board falls back to hold (kSolverFallback), its designed reaction to overruns; nothing else.
+  EXPECT_EQ(board.summary("solver_failures"), 0);
+  unsigned allowed = proto::fault::kSensorTimeout | proto::fault::kHeartbeatTimeout;
+  if (board.summary("mpc_overruns") > 0) allowed |= proto::fault::kSolverFallback;
+  EXPECT_EQ(fault_bits & ~allowed, 0u) << "a fault other than a watchdog's or an overrun's";
 }
 
 }  // namespace
