@@ -447,15 +447,6 @@ Spread InvariantEkf::spread() const {
   return s;
 }
 
-const char* to_string(Trust trust) {
-  switch (trust) {
-    case Trust::kTracking: return "tracking";
-    case Trust::kDegraded: return "degraded";
-    case Trust::kLost: return "lost";
-  }
-  return "unknown";
-}
-
 BaseEstimate InvariantEkf::estimate() const {
   BaseEstimate e;
   // The torso origin is -imu from the IMU, in torso (= IMU) coordinates.
