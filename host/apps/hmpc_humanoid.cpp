@@ -37,8 +37,9 @@ void usage(std::FILE* out) {
       "  --initial-velocity VX,VY,VZ  the whole robot moving at the start [m/s], world,\n"
       "                      at most 1 m/s (default: at rest)\n"
       "  --estimator NAME    what the MPC solves from: truth (the simulator's state,\n"
-      "                      default) or invariant-ekf (the estimate from a simulated\n"
-      "                      BMI088 IMU and the joint encoders, after a 0.5 s rest;\n"
+      "                      default), invariant-ekf or whole-body-ukf (the estimate\n"
+      "                      from a simulated BMI088 IMU and the joint encoders, after\n"
+      "                      a 0.5 s rest; the UKF also takes the applied torques;\n"
       "                      biped motions, started at rest); writes estimation.csv\n"
       "                      and estimation.png\n"
       "  --sensor-seed N     the simulated sensors' noise and biases, 0..2^31 (default 1)\n"
@@ -149,7 +150,7 @@ int main(int argc, char** argv) {
   parser.text("--estimator", [&](const std::string& v) {
     return parse_state_feedback(v, config.feedback)
                ? std::string()
-               : hmpc::cli::bad_value("--estimator", "truth or invariant-ekf", v);
+               : hmpc::cli::bad_value("--estimator", "truth, invariant-ekf or whole-body-ukf", v);
   });
   int seed = 1;
   parser.integer("--sensor-seed", 0, 2147483647, seed);

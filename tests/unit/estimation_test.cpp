@@ -570,6 +570,38 @@ TEST(ClosedLoopThroughTheEstimator, StandingOnTheEstimateStaysUpOnEverySeed) {
   }
 }
 
+// The thesis's whole-body UKF in the same loop, on the same seeds: motion I's check passes and
+// the estimate the MPC got meets the height and velocity targets on every seed. The tilt target
+// (1 degree) is printed, not asserted: seed 2 misses it (1.05 degrees RMS; README, state
+// estimation). Its model is the simulator's (whole_body_ukf.hpp).
+TEST(ClosedLoopThroughTheEstimator, StandingOnTheWholeBodyUkfPassesOnEverySeed) {
+  const Motion& motion = test::motion("I-standing");
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    ClosedLoopConfig config;
+    config.duration = 6.0;
+    config.truncate = false;
+    config.feedback = StateFeedback::kWholeBodyUkf;
+    config.sensors.seed = seed;
+    const ClosedLoopRun run = run_closed_loop(motion, config);
+    EXPECT_FALSE(run.estimate_lost()) << seed;
+    ASSERT_EQ(run.samples.size(), 200u) << seed;
+    for (const ClosedLoopSample& sample : run.samples) {
+      EXPECT_NE(sample.trust, est::Trust::kLost) << seed;
+    }
+    const FeedbackErrors e = feedback_errors(run);
+    EXPECT_GT(e.height_rms, 0.0) << seed;  // fed the truth, it would be zero
+    EXPECT_LT(e.height_rms, 0.01) << seed;
+    EXPECT_LT(e.horizontal_velocity_rms, 0.05) << seed;
+    const PhysicalCheck check = check_motion("I", motion, run);
+    EXPECT_TRUE(check.passed) << seed << ": " << check.verdict;
+    std::printf(
+        "standing on the whole-body UKF, seed %d: height %.2f mm, horizontal velocity %.4f m/s, "
+        "tilt %.3f deg RMS; mean iterations %.2f (on the truth: 2)\n",
+        static_cast<int>(seed), 1e3 * e.height_rms, e.horizontal_velocity_rms,
+        e.tilt_rms * 180 / M_PI, summarise(run).mean_iterations);
+  }
+}
+
 }  // namespace
 
 namespace {

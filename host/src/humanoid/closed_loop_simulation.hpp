@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "hmpc/estimation/biped_state_estimator.hpp"
+#include "hmpc/estimation/whole_body_ukf.hpp"
 #include "hmpc/humanoid/closed_loop.hpp"
 #include "hmpc/mpc/deadline_stop.hpp"
 #include "hmpc/mpc/receding_horizon_mpc.hpp"
@@ -146,7 +147,7 @@ void add_vertical_forces(const BasicContactState<A>& contact, double weight,
   }
 }
 
-// What the MPC is given (ClosedLoopConfig::feedback): the truth, or the biped's estimator on its
+// What the MPC is given (ClosedLoopConfig::feedback): the truth, or an estimator on the biped's
 // simulated sensors, which read the plant every simulator step.
 template <int A>
 class Feedback {
@@ -156,22 +157,34 @@ class Feedback {
     if constexpr (A == 0) {
       if (config.feedback == StateFeedback::kTruth) return;
       sensors_.emplace(model, config.sensors);
-      estimator_.emplace(config.problem.parameters);
+      if (config.feedback == StateFeedback::kInvariantEkf) {
+        estimator_.emplace(config.problem.parameters);
+      } else {
+        ukf_.emplace(config.problem.parameters);
+      }
       // The robot held still in its starting stance: nothing moves, gravity alone is felt.
       sensors_->start_at_rest(initial.q);
       const BasicVelocity<A> still = BasicVelocity<A>::Zero();
       const int samples = static_cast<int>(std::lround(config.rest_seconds / kSimulatorStep));
+      estimation::ImuRest rest;
+      SensorReadings reading;
       for (int k = 0; k < samples; ++k) {
-        estimator_->rest(sensors_->measure(initial.q, still, still), kSimulatorStep);
+        reading = sensors_->measure(initial.q, still, still);
+        if (estimator_) estimator_->rest(reading, kSimulatorStep);
+        rest.add(reading.imu, kSimulatorStep);
       }
-      estimator_->start();
+      if (estimator_) estimator_->start();
+      if (ukf_) ukf_->initialize_at_rest(rest, reading.angles);
     }
   }
 
-  // One simulator step that ended at `x` after the mean acceleration `a`.
-  void step(const BasicState<A>& x, const BasicVelocity<A>& a) {
+  // One simulator step that ended at `x` after the mean acceleration `a` under torques `u`.
+  void step(const BasicState<A>& x, const BasicVelocity<A>& a, const BasicJointVector<A>& u) {
     if constexpr (A == 0) {
-      if (estimator_) estimator_->update(sensors_->measure(x.q, x.v, a), kSimulatorStep);
+      if (!sensors_) return;
+      const SensorReadings reading = sensors_->measure(x.q, x.v, a);
+      if (estimator_) estimator_->update(reading, kSimulatorStep);
+      if (ukf_) ukf_->update(u, reading, kSimulatorStep);
     }
   }
 
@@ -179,6 +192,7 @@ class Feedback {
   BasicState<A> state(const BasicState<A>& truth) const {
     if constexpr (A == 0) {
       if (estimator_) return estimator_->state();
+      if (ukf_) return ukf_->state();
     }
     return truth;
   }
@@ -187,8 +201,9 @@ class Feedback {
   void give(const BasicState<A>& truth, BasicClosedLoopSample<A>& sample) const {
     sample.feedback = state(truth);
     if constexpr (A == 0) {
-      if (!estimator_) return;
-      const estimation::BaseEstimate e = estimator_->filter().estimate();
+      if (!sensors_) return;
+      const estimation::BaseEstimate e =
+          estimator_ ? estimator_->filter().estimate() : ukf_->estimate();
       sample.spread = e.spread;
       sample.trust = e.trust;
     }
@@ -197,6 +212,7 @@ class Feedback {
  private:
   std::optional<BipedSensors> sensors_;
   std::optional<estimation::BipedStateEstimator> estimator_;
+  std::optional<estimation::WholeBodyUkf> ukf_;
 };
 
 template <class Mpc, int A>
@@ -251,7 +267,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
         if (config.record_milliseconds) {
           run.milliseconds.push_back({t + kSimulatorStep, next, acceleration, u});
         }
-        feedback.step(next, acceleration);
+        feedback.step(next, acceleration, u);
         x = next;
         add_vertical_forces(simulator.contact_state(), 1.0 / (kFineSteps * kSimulatorSteps),
                             sample);

@@ -28,12 +28,13 @@ const char* name_of(MpcKind kind);
 bool parse_mpc_kind(const std::string& name, MpcKind& kind);
 
 // What the MPC solves from at each sampling instant: the simulator's exact state, as the thesis's
-// simulations had it, or what a robot without force sensors knows: the contact-aided invariant
-// EKF (hmpc/estimation/biped_state_estimator.hpp) on the biped's simulated IMU, encoders and
-// boards' velocities (hmpc/humanoid/sensors.hpp).
-enum class StateFeedback { kTruth, kInvariantEkf };
-constexpr int kStateFeedbacks = 2;
-// "truth", "invariant-ekf".
+// simulations had it, or what a robot without force sensors knows from the biped's simulated IMU,
+// encoders and boards' velocities (hmpc/humanoid/sensors.hpp): the contact-aided invariant EKF
+// (hmpc/estimation/biped_state_estimator.hpp) or the thesis's whole-body UKF with its base
+// Kalman filter (hmpc/estimation/whole_body_ukf.hpp), which also takes the applied torques.
+enum class StateFeedback { kTruth, kInvariantEkf, kWholeBodyUkf };
+constexpr int kStateFeedbacks = 3;
+// "truth", "invariant-ekf", "whole-body-ukf".
 const char* name_of(StateFeedback feedback);
 bool parse_state_feedback(const std::string& name, StateFeedback& feedback);
 
