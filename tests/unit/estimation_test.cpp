@@ -535,6 +535,25 @@ TEST(InvariantEkf, AnUpdateAllocatesNothing) {
   EXPECT_NE(ukf.trust(), est::Trust::kLost);
 }
 
+// Motion I for 6 s on `feedback` with the sensors of `seed`, untruncated: the robot must stay
+// up and the estimate never be lost or non-finite.
+ClosedLoopRun stand_on(StateFeedback feedback, std::uint64_t seed) {
+  ClosedLoopConfig config;
+  config.duration = 6.0;
+  config.truncate = false;
+  config.feedback = feedback;
+  config.sensors.seed = seed;
+  const ClosedLoopRun run = run_closed_loop(test::motion("I-standing"), config);
+  EXPECT_FALSE(run.fell()) << seed;
+  EXPECT_FALSE(run.estimate_lost()) << seed;
+  EXPECT_EQ(run.samples.size(), 200u) << seed;
+  for (const ClosedLoopSample& sample : run.samples) {
+    EXPECT_TRUE(sample.feedback.q.allFinite() && sample.feedback.v.allFinite()) << seed;
+    EXPECT_NE(sample.trust, est::Trust::kLost) << seed;
+  }
+  return run;
+}
+
 // The MPC solving from the estimate (ClosedLoopConfig::feedback), untruncated so that the
 // figures repeat on any machine; the truth judges the motion. Standing on five sensor seeds:
 // the robot stays up, the estimate is never lost or non-finite, and what the MPC was given is
@@ -543,19 +562,7 @@ TEST(InvariantEkf, AnUpdateAllocatesNothing) {
 TEST(ClosedLoopThroughTheEstimator, StandingOnTheEstimateStaysUpOnEverySeed) {
   const Motion& motion = test::motion("I-standing");
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
-    ClosedLoopConfig config;
-    config.duration = 6.0;
-    config.truncate = false;
-    config.feedback = StateFeedback::kInvariantEkf;
-    config.sensors.seed = seed;
-    const ClosedLoopRun run = run_closed_loop(motion, config);
-    EXPECT_FALSE(run.fell()) << seed;
-    EXPECT_FALSE(run.estimate_lost()) << seed;
-    ASSERT_EQ(run.samples.size(), 200u) << seed;
-    for (const ClosedLoopSample& sample : run.samples) {
-      EXPECT_TRUE(sample.feedback.q.allFinite() && sample.feedback.v.allFinite()) << seed;
-      EXPECT_NE(sample.trust, est::Trust::kLost) << seed;
-    }
+    const ClosedLoopRun run = stand_on(StateFeedback::kInvariantEkf, seed);
     // Fed the truth, these would be zero.
     const FeedbackErrors e = feedback_errors(run);
     EXPECT_GT(e.height_rms, 0.0) << seed;
@@ -577,17 +584,7 @@ TEST(ClosedLoopThroughTheEstimator, StandingOnTheEstimateStaysUpOnEverySeed) {
 TEST(ClosedLoopThroughTheEstimator, StandingOnTheWholeBodyUkfPassesOnEverySeed) {
   const Motion& motion = test::motion("I-standing");
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
-    ClosedLoopConfig config;
-    config.duration = 6.0;
-    config.truncate = false;
-    config.feedback = StateFeedback::kWholeBodyUkf;
-    config.sensors.seed = seed;
-    const ClosedLoopRun run = run_closed_loop(motion, config);
-    EXPECT_FALSE(run.estimate_lost()) << seed;
-    ASSERT_EQ(run.samples.size(), 200u) << seed;
-    for (const ClosedLoopSample& sample : run.samples) {
-      EXPECT_NE(sample.trust, est::Trust::kLost) << seed;
-    }
+    const ClosedLoopRun run = stand_on(StateFeedback::kWholeBodyUkf, seed);
     const FeedbackErrors e = feedback_errors(run);
     EXPECT_GT(e.height_rms, 0.0) << seed;  // fed the truth, it would be zero
     EXPECT_LT(e.height_rms, 0.01) << seed;
