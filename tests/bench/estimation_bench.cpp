@@ -1,7 +1,9 @@
 // The base estimator's cost per 1 ms sample, against that sample period, on a recorded walk
 // (motion II under Coarse-Fast on the 1 ms simulator, read by the biped's simulated sensors):
-// the whole update (propagate with the IMU, correct with the legs, contact from the legs), its
-// two halves, and the state the MPC is given once per 30 ms sample. Median, 99th percentile and
+// the invariant EKF's whole update (propagate with the IMU, correct with the legs, contact from
+// the legs), its two halves, and the state the MPC is given once per 30 ms sample; the thesis's
+// whole-body UKF's update (57 sigma points through the step map, the base Kalman filter), and
+// the ratio of the two. Median, 99th percentile and
 // largest over every sample of three passes; one process on a shared machine, so the largest is
 // the machine's as much as the filter's.
 #include <algorithm>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "hmpc/estimation/biped_state_estimator.hpp"
+#include "hmpc/estimation/whole_body_ukf.hpp"
 #include "hmpc/humanoid/closed_loop.hpp"
 #include "hmpc/humanoid/motion.hpp"
 
@@ -60,10 +63,11 @@ int main() {
     readings.push_back(sensors.measure(step.state.q, step.state.v, step.acceleration));
   }
 
-  std::vector<double> update, propagate, correct, state;
+  std::vector<double> update, propagate, correct, state, ukf_update;
   for (int pass = 0; pass < kPasses; ++pass) {
     est::BipedStateEstimator estimator;
     est::InvariantEkf halves;
+    est::WholeBodyUkf ukf;
     est::ImuRest rest;
     for (int k = 0; k < 500; ++k) {
       estimator.rest(at_rest, kDt);
@@ -71,6 +75,7 @@ int main() {
     }
     estimator.start();
     halves.initialize_at_rest(rest, at_rest.angles);
+    ukf.initialize_at_rest(rest, at_rest.angles);
     for (std::size_t k = 0; k < readings.size(); ++k) {
       const SensorReadings& r = readings[k];
       auto t0 = Clock::now();
@@ -90,6 +95,10 @@ int main() {
       const auto t2 = Clock::now();
       propagate.push_back(microseconds(t0, t1));
       correct.push_back(microseconds(t1, t2));
+      t0 = Clock::now();
+      ukf.update(run.milliseconds[k].torque, r, kDt);
+      t1 = Clock::now();
+      ukf_update.push_back(microseconds(t0, t1));
     }
   }
   std::printf("base estimator on %zu samples of motion II (x%d passes), %.0f us sample period:\n",
@@ -101,5 +110,11 @@ int main() {
   print("the MPC's state (once per 30 ms sample)", figures(state));
   std::printf("estimator update / 1 ms sample period: median %.3f, p99 %.3f, largest %.3f\n",
               whole.median / (kDt * 1e6), whole.p99 / (kDt * 1e6), whole.largest / (kDt * 1e6));
+  const Figures thesis = figures(ukf_update);
+  print("whole-body UKF update (with base KF)", thesis);
+  std::printf("whole-body UKF update / 1 ms sample period: median %.3f, p99 %.3f, largest %.3f\n",
+              thesis.median / (kDt * 1e6), thesis.p99 / (kDt * 1e6), thesis.largest / (kDt * 1e6));
+  std::printf("whole-body UKF / invariant EKF update, median: %.1f\n",
+              thesis.median / whole.median);
   return 0;
 }
