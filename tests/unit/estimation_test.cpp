@@ -13,6 +13,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hmpc/estimation/biped_state_estimator.hpp"
@@ -606,8 +607,10 @@ namespace {
 // The thesis's design against the invariant EKF (contact from the legs) on the same recordings:
 // each meets the targets; the figures and the UKF's cost are printed.
 TEST(WholeBodyUkf, MeetsTheTargetsBesideTheInvariantEkf) {
-  for (const char* motion : {"I-standing", "slow-squat", "II-walking"}) {
-    const Recording r = record(motion, 3.0, 22);
+  const std::pair<const char*, double> motions[] = {
+      {"I-standing", 3.0}, {"slow-squat", 3.0}, {"II-walking", 3.0}, {"V-low-jump", 6.0}};
+  for (const auto& [motion, seconds] : motions) {
+    const Recording r = record(motion, seconds, 22);
     double us = 0;
     const Errors ukf = run_ukf(r, kRestSeconds, {}, 0.0, &us);
     const Errors iekf = run_filter(r, kRestSeconds, Contact::kFromLegs);
