@@ -632,8 +632,9 @@ TEST(WholeBodyUkf, AWrongMassAndNoisyTorquesStillMeetTheTargets) {
   expect_within_targets(e);
 }
 
-// A reading that is not finite is not used: counted, the estimate stays finite and degraded,
-// then tracking again; a gap beyond max_interval loses it.
+// IMU readings not finite, out of range or stuck, and joint readings not finite, are not used:
+// counted, the estimate stays finite and degraded, then tracking again; a gap beyond
+// max_interval loses it.
 TEST(WholeBodyUkf, BadReadingsAreSkippedAndAGapLosesTheEstimate) {
   const Recording r = record("I-standing", 0.4, 23);
   est::WholeBodyUkf filter;
@@ -650,7 +651,16 @@ TEST(WholeBodyUkf, BadReadingsAreSkippedAndAGapLosesTheEstimate) {
   bad = {r.imu[k], r.angles[k], r.rates[k]};
   bad.angles[3] = std::numeric_limits<double>::infinity();
   filter.update(r.torque[k], bad, kDt);
+  bad = {r.imu[k], r.angles[k], r.rates[k]};
+  bad.imu.angular_velocity.z() = 2 * config.imu.gyroscope.range;
+  filter.update(r.torque[k], bad, kDt);
+  // A stuck IMU: the same reading from now on is refused once stuck_samples have come.
+  for (int n = 0; n < config.stuck_samples; ++n, ++k) {
+    filter.update(r.torque[k], {r.imu[50], r.angles[k], r.rates[k]}, kDt);
+  }
   EXPECT_EQ(filter.rejected().imu_not_finite, 1);
+  EXPECT_EQ(filter.rejected().imu_out_of_range, 1);
+  EXPECT_EQ(filter.rejected().imu_stuck, 1);
   EXPECT_EQ(filter.rejected().joints_not_finite, 1);
   EXPECT_EQ(filter.trust(), est::Trust::kDegraded);
   EXPECT_TRUE(filter.state().q.allFinite() && filter.state().v.allFinite());

@@ -35,7 +35,8 @@ Matrix3 left_jacobian(const Vector3& phi) {
 InvariantEkf::InvariantEkf(const humanoid::Parameters& parameters, const InvariantEkfConfig& config)
     : model_(parameters), dynamics_(model_), config_(config),
       ground_height_(
-          -humanoid::standing_sink(model_.total_mass() * model_.gravity.norm(), config.contact)) {
+          -humanoid::standing_sink(model_.total_mass() * model_.gravity.norm(), config.contact)),
+      screen_(config.imu, config.stuck_samples) {
   const humanoid::ContactModel contact(model_, parameters, config.contact);
   for (int c = 0; c < humanoid::kFootPoints; ++c) sole_corner_[c] = contact.point(c).local;
 }
@@ -136,10 +137,7 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
   const Matrix3 vertical = up * up.transpose();
   covariance_.block<3, 3>(kBa, kBa) =
       sa * sa * vertical + sh * sh * (Matrix3::Identity() - vertical);
-  last_good_.angular_velocity = rest.mean_angular_velocity();
-  last_good_.specific_force = force;
-  last_good_.saturated = false;
-  same_readings_ = 0;
+  screen_.start(rest.mean_angular_velocity(), force);
   degraded_samples_ = 0;
   lost_ = false;
   on_ground_ = {true, true};
@@ -155,27 +153,10 @@ void InvariantEkf::propagate(const sensors::ImuReading& imu, double dt) {
     degraded_samples_ = config_.recovery_samples;
     return;
   }
-  const bool readable = imu.angular_velocity.allFinite() && imu.specific_force.allFinite();
-  const bool same = readable && imu.angular_velocity == last_reading_.angular_velocity &&
-                    imu.specific_force == last_reading_.specific_force;
-  same_readings_ = same ? same_readings_ + 1 : 0;
-  if (readable) last_reading_ = imu;
-  bool good = false;
-  if (!readable) {
-    ++rejected_.imu_not_finite;
-  } else if (imu.saturated ||
-             imu.angular_velocity.cwiseAbs().maxCoeff() > config_.imu.gyroscope.range ||
-             imu.specific_force.cwiseAbs().maxCoeff() > config_.imu.accelerometer.range) {
-    ++rejected_.imu_out_of_range;
-  } else if (same_readings_ + 1 >= config_.stuck_samples) {
-    ++rejected_.imu_stuck;
-  } else {
-    good = true;
-    last_good_ = imu;
-  }
+  const bool good = screen_.check(imu, rejected_);
   save(snapshot_);
-  integrate(last_good_.angular_velocity - gyroscope_bias_,
-            last_good_.specific_force - accelerometer_bias_, dt);
+  integrate(screen_.last_good().angular_velocity - gyroscope_bias_,
+            screen_.last_good().specific_force - accelerometer_bias_, dt);
   if (good) {
     if (degraded_samples_ > 0) --degraded_samples_;
   } else {

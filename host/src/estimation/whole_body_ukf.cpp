@@ -48,15 +48,11 @@ Matrix3 skew(const Vector3& a) {
   return s;
 }
 
-bool finite(const humanoid::SensorReadings& r) {
-  return r.imu.angular_velocity.allFinite() && r.imu.specific_force.allFinite();
-}
-
 }  // namespace
 
 WholeBodyUkf::WholeBodyUkf(const humanoid::Parameters& parameters, const WholeBodyUkfConfig& config)
     : model_(parameters), step_map_(model_, parameters, config.contact), config_(config),
-      base_(config.imu) {
+      base_(config.imu), screen_(config.imu, config.stuck_samples) {
   lambda_ = config_.alpha * config_.alpha * kN - kN;
   weight_mean0_ = lambda_ / (kN + lambda_);
   weight_cov0_ = weight_mean0_ + 1.0 - config_.alpha * config_.alpha + config_.beta;
@@ -152,8 +148,7 @@ void WholeBodyUkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
   imu_point(state_, p_imu, v_imu);
   base_.initialize(p_imu, v_imu, p, v, (force.norm() - g) * up,
                    sa * sa * vertical + sh * sh * (Matrix3::Identity() - vertical));
-  last_good_imu_.angular_velocity = rest.mean_angular_velocity();
-  last_good_imu_.specific_force = force;
+  screen_.start(rest.mean_angular_velocity(), force);
   degraded_samples_ = 0;
   lost_ = false;
   initialized_ = true;
@@ -167,25 +162,23 @@ void WholeBodyUkf::update(const JointVector& torque, const humanoid::SensorReadi
     lost_ = true;
     return;
   }
-  const bool imu_finite = finite(reading);
+  const bool imu_good = screen_.check(reading.imu, rejected_);
   const bool joints_finite = reading.angles.allFinite() && reading.rates.allFinite();
-  if (!imu_finite) ++rejected_.imu_not_finite;
   if (!joints_finite) ++rejected_.joints_not_finite;
-  if (!imu_finite || !joints_finite || !torque.allFinite()) {
+  if (!imu_good || !joints_finite || !torque.allFinite()) {
     degraded_samples_ = config_.recovery_samples;
   } else if (degraded_samples_ > 0) {
     --degraded_samples_;
   }
-  if (imu_finite) last_good_imu_ = reading.imu;
   const State saved_state = state_;
   const Covariance saved_covariance = covariance_;
   const BaseKalmanFilter saved_base = base_;
 
   // The base filter runs on the IMU with the attitude the whole-body filter has now.
   base_.propagate(orientation_of(state_).normalized().toRotationMatrix(),
-                  last_good_imu_.specific_force, model_.gravity, dt);
+                  screen_.last_good().specific_force, model_.gravity, dt);
   const JointVector tau = torque.allFinite() ? torque : JointVector::Zero();
-  const bool ok = run_unscented(tau, reading, imu_finite && joints_finite, dt);
+  const bool ok = run_unscented(tau, reading, imu_good, joints_finite, dt);
   if (ok) correct_base_filter();
   const bool finite_now = state_.q.allFinite() && state_.v.allFinite() && covariance_.allFinite() &&
                           base_.covariance().allFinite() && base_.position().allFinite() &&
@@ -200,7 +193,7 @@ void WholeBodyUkf::update(const JointVector& torque, const humanoid::SensorReadi
 }
 
 bool WholeBodyUkf::run_unscented(const JointVector& torque, const humanoid::SensorReadings& reading,
-                                 bool readings_finite, double dt) {
+                                 bool imu_good, bool joints_finite, double dt) {
   // (U1) sigma points.
   square_root_.compute((kN + lambda_) * covariance_);
   if (square_root_.info() != Eigen::Success) return false;
@@ -237,7 +230,7 @@ bool WholeBodyUkf::run_unscented(const JointVector& torque, const humanoid::Sens
       JointVector::Constant(config_.joint_torque_noise * config_.joint_torque_noise);
   p.block<humanoid::kDofs, humanoid::kDofs>(kDv, kDv).noalias() +=
       g * torque_variance.asDiagonal() * g.transpose();
-  if (!readings_finite) {
+  if (!joints_finite) {
     state_ = predicted;
     covariance_ = 0.5 * (p + p.transpose());
     return true;
@@ -264,12 +257,15 @@ bool WholeBodyUkf::run_unscented(const JointVector& torque, const humanoid::Sens
   auto r = innovation_covariance_.diagonal();
   r.segment<kJoints>(kZangle).array() += config_.encoder_noise * config_.encoder_noise;
   r.segment<kJoints>(kZrate).array() += config_.joint_rate_noise * config_.joint_rate_noise;
-  r.segment<3>(kZgyro).array() += gyro * gyro;
-  r.segment<3>(kZaccel).array() += accel2;
+  // A refused IMU reading: its rows are uninformative (a variance far beyond any reading).
+  constexpr double kUnused = 1e12;
+  r.segment<3>(kZgyro).array() += imu_good ? gyro * gyro : kUnused;
+  r.segment<3>(kZaccel).array() += imu_good ? accel2 : kUnused;
   innovation_covariance_.block<6, 6>(kZp, kZp) +=
       config_.exchange_inflation * base_.covariance().topLeftCorner<6, 6>();
   Measurement z;
-  z << reading.angles, reading.rates, reading.imu.angular_velocity, reading.imu.specific_force,
+  const sensors::ImuReading& imu_reading = imu_good ? reading.imu : screen_.last_good();
+  z << reading.angles, reading.rates, imu_reading.angular_velocity, imu_reading.specific_force,
       base_.position(), base_.velocity();
   innovation_llt_.compute(innovation_covariance_);
   if (innovation_llt_.info() != Eigen::Success) return false;

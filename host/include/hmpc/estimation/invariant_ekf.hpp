@@ -27,6 +27,7 @@
 #include <cstdint>
 
 #include "hmpc/estimation/base_estimate.hpp"
+#include "hmpc/estimation/imu_screen.hpp"
 #include "hmpc/humanoid/contact.hpp"
 #include "hmpc/humanoid/dynamics.hpp"
 #include "hmpc/sensors/imu.hpp"
@@ -205,11 +206,9 @@ class InvariantEkf {
   std::array<bool, kFeet> on_ground_{};  // inferred from the legs
   Covariance covariance_ = Covariance::Identity();
 
-  sensors::ImuReading last_reading_{};  // the last finite one, to find a stuck sensor
-  sensors::ImuReading last_good_{};     // stands in for a bad one
-  int same_readings_ = 0;               // in a row
-  int degraded_samples_ = 0;            // left until trusted again
-  bool lost_ = true;                    // until started; after a gap or a non-finite update
+  ImuScreen screen_;
+  int degraded_samples_ = 0;  // left until trusted again
+  bool lost_ = true;          // until started; after a gap or a non-finite update
   RejectedInputs rejected_;
   Snapshot snapshot_{};  // a member: no 4 kB on the stack each sample
 };

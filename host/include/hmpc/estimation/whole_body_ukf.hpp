@@ -38,6 +38,7 @@
 
 #include "hmpc/estimation/base_estimate.hpp"
 #include "hmpc/estimation/base_kalman_filter.hpp"
+#include "hmpc/estimation/imu_screen.hpp"
 #include "hmpc/humanoid/sensors.hpp"
 #include "hmpc/humanoid/step.hpp"
 
@@ -83,10 +84,13 @@ struct WholeBodyUkfConfig {
   double initial_velocity = 0.01;        // m/s and rad/s, at rest
   double initial_joint_angle = 1e-4;     // rad, the encoders
   double initial_joint_velocity = 0.01;  // rad/s
-  double max_interval = 0.05;            // [s], as the invariant EKF's
-  int recovery_samples = 100;            // degraded after a bad input, as the invariant EKF's
-  double trusted_tilt_sigma = 0.0873;    // rad, 5 degrees, as the invariant EKF's
-  double trusted_velocity_sigma = 0.5;   // m/s
+  // IMU readings refused (imu_screen.hpp): stuck after stuck_samples equal readings in a row,
+  // as the invariant EKF's.
+  int stuck_samples = 20;
+  double max_interval = 0.05;           // [s], as the invariant EKF's
+  int recovery_samples = 100;           // degraded after a bad input, as the invariant EKF's
+  double trusted_tilt_sigma = 0.0873;   // rad, 5 degrees, as the invariant EKF's
+  double trusted_velocity_sigma = 0.5;  // m/s
 };
 
 class WholeBodyUkf {
@@ -106,10 +110,12 @@ class WholeBodyUkf {
   // sunk as by the robot's weight. The rest must hold at least one sample.
   void initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles);
 
-  // One sample dt after the last: the torques applied over it, then its readings. A reading
-  // that is not finite is not used (the dynamics alone carry the estimate); an interval that
-  // is not finite, not positive or above max_interval, or an update whose result is not
-  // finite, loses the estimate.
+  // One sample dt after the last: the torques applied over it, then its readings. An IMU
+  // reading refused by the screen (not finite, out of range, stuck) is not used: the base
+  // filter integrates the last good one and the UKF corrects with the joints alone; joint
+  // readings that are not finite are not used either (the dynamics alone carry the estimate).
+  // Either degrades the estimate for recovery_samples. An interval that is not finite, not
+  // positive or above max_interval, or an update whose result is not finite, loses it.
   void update(const JointVector& torque, const humanoid::SensorReadings& reading, double dt);
 
   // The robot's state as model.hpp lays it out.
@@ -130,7 +136,7 @@ class WholeBodyUkf {
   void predict_measurement(const State& before, const State& after, double dt,
                            Measurement& z) const;
   bool run_unscented(const JointVector& torque, const humanoid::SensorReadings& reading,
-                     bool readings_finite, double dt);
+                     bool imu_good, bool joints_finite, double dt);
   void correct_base_filter();
 
   humanoid::Model model_;
@@ -145,8 +151,8 @@ class WholeBodyUkf {
   Covariance covariance_ = Covariance::Identity();
   humanoid::Vector3 gyroscope_bias_ = humanoid::Vector3::Zero();
   BaseKalmanFilter base_;
-  sensors::ImuReading last_good_imu_{};  // stands in for a reading that is not finite
-  int degraded_samples_ = 0;             // left until trusted again
+  ImuScreen screen_;
+  int degraded_samples_ = 0;  // left until trusted again
   RejectedInputs rejected_;
 
   // Workspace (members: a few tens of kB, not on the stack each sample).
