@@ -157,8 +157,9 @@ class ErrorSum {
 };
 
 // Runs the filter: a rest of `rest_seconds` to start, then every sample.
-Errors run_filter(const Recording& r, double rest_seconds, Contact contact = Contact::kFromForces) {
-  est::InvariantEkf filter;
+Errors run_filter(const Recording& r, double rest_seconds, Contact contact = Contact::kFromForces,
+                  const est::InvariantEkfConfig& config = {}) {
+  est::InvariantEkf filter({}, config);
   est::ImuRest rest;
   const int rest_samples = static_cast<int>(std::lround(rest_seconds / kDt));
   ErrorSum sum(r);
@@ -185,8 +186,9 @@ Errors run_filter(const Recording& r, double rest_seconds, Contact contact = Con
 // (plus white noise of `torque_noise` [N m] per joint and sample, seeded) and a model of the
 // robot with `parameters`; microseconds per sample into `us_per_sample` if given.
 Errors run_ukf(const Recording& r, double rest_seconds, const Parameters& parameters = {},
-               double torque_noise = 0.0, double* us_per_sample = nullptr) {
-  est::WholeBodyUkf filter(parameters);
+               const est::WholeBodyUkfConfig& config = {}, double torque_noise = 0.0,
+               double* us_per_sample = nullptr) {
+  est::WholeBodyUkf filter(parameters, config);
   est::ImuRest rest;
   const int rest_samples = static_cast<int>(std::lround(rest_seconds / kDt));
   std::mt19937_64 random(5);
@@ -612,7 +614,7 @@ TEST(WholeBodyUkf, MeetsTheTargetsBesideTheInvariantEkf) {
   for (const auto& [motion, seconds] : motions) {
     const Recording r = record(motion, seconds, 22);
     double us = 0;
-    const Errors ukf = run_ukf(r, kRestSeconds, {}, 0.0, &us);
+    const Errors ukf = run_ukf(r, kRestSeconds, {}, {}, 0.0, &us);
     const Errors iekf = run_filter(r, kRestSeconds, Contact::kFromLegs);
     print((std::string(motion) + ", whole-body UKF").c_str(), ukf);
     print((std::string(motion) + ", invariant EKF").c_str(), iekf);
@@ -622,14 +624,27 @@ TEST(WholeBodyUkf, MeetsTheTargetsBesideTheInvariantEkf) {
 }
 
 // The UKF's model is the simulator's own; a robot differs. A model 5 % lighter than the robot
-// and joint torques off by 5 N m (white, per sample) still meet the targets on walking.
+// and joint torques off by 5 N m (white, per sample) still meet the targets on walking. A ground
+// half or twice as stiff as the model's does not (printed beside the invariant EKF with the same
+// error, whose only use of the ground is the standing sink): the UKF's edge needs a contact
+// model identified on the robot (README, state estimation).
 TEST(WholeBodyUkf, AWrongMassAndNoisyTorquesStillMeetTheTargets) {
   const Recording r = record("II-walking", 3.0, 22);
   Parameters lighter;
   lighter.body_mass *= 0.95;
-  const Errors e = run_ukf(r, kRestSeconds, lighter, 5.0);
+  const Errors e = run_ukf(r, kRestSeconds, lighter, {}, 5.0);
   print("walking, model 5 % light, torques +-5 N m", e);
   expect_within_targets(e);
+  for (const double stiffness : {0.5, 2.0}) {
+    est::WholeBodyUkfConfig config;
+    config.contact.stiffness *= stiffness;
+    const Errors g = run_ukf(r, kRestSeconds, {}, config);
+    std::printf("ground stiffness x%.1f in the model: ", stiffness);
+    print("walking, UKF", g);
+    est::InvariantEkfConfig iekf;
+    iekf.contact.stiffness *= stiffness;
+    print("walking, IEKF", run_filter(r, kRestSeconds, Contact::kFromLegs, iekf));
+  }
 }
 
 // IMU readings not finite, out of range or stuck, and joint readings not finite, are not used:
