@@ -152,15 +152,21 @@ void add_vertical_forces(const BasicContactState<A>& contact, double weight,
 template <int A>
 class Feedback {
  public:
+  // `contact` is the plant's (the motion's: with a chair for motion IV), which the estimators'
+  // models share.
   Feedback(const ClosedLoopConfig& config, const BasicModel<A>& model,
-           const BasicState<A>& initial) {
+           const ContactParameters& contact, const BasicState<A>& initial) {
     if constexpr (A == 0) {
       if (config.feedback == StateFeedback::kTruth) return;
       sensors_.emplace(model, config.sensors);
       if (config.feedback == StateFeedback::kInvariantEkf) {
-        estimator_.emplace(config.problem.parameters);
+        estimation::InvariantEkfConfig filter;
+        filter.contact = contact;
+        estimator_.emplace(config.problem.parameters, filter);
       } else {
-        ukf_.emplace(config.problem.parameters);
+        estimation::WholeBodyUkfConfig filter;
+        filter.contact = contact;
+        ukf_.emplace(config.problem.parameters, filter);
       }
       // The robot held still in its starting stance: nothing moves, gravity alone is felt.
       sensors_->start_at_rest(initial.q);
@@ -199,14 +205,17 @@ class Feedback {
 
   // The same, with its spread and trust, into `sample`.
   void give(const BasicState<A>& truth, BasicClosedLoopSample<A>& sample) const {
-    sample.feedback = state(truth);
     if constexpr (A == 0) {
-      if (!sensors_) return;
-      const estimation::BaseEstimate e =
-          estimator_ ? estimator_->filter().estimate() : ukf_->estimate();
-      sample.spread = e.spread;
-      sample.trust = e.trust;
+      if (sensors_) {
+        const estimation::BaseEstimate e =
+            estimator_ ? estimator_->filter().estimate() : ukf_->estimate();
+        sample.feedback = estimator_ ? estimator_->state(e) : ukf_->state();
+        sample.spread = e.spread;
+        sample.trust = e.trust;
+        return;
+      }
     }
+    sample.feedback = truth;
   }
 
  private:
@@ -230,7 +239,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   constexpr int kSimulatorSteps =
       static_cast<int>(kFastStep / kSimulatorStep + 0.5);  // NOLINT(bugprone-incorrect-roundings)
 
-  Feedback<A> feedback(config, model, initial);
+  Feedback<A> feedback(config, model, plant.contact, initial);
   if (config.warm_start) mpc.initialize(to_vector(feedback.state(initial)), kOfflineIterations);
   BasicClosedLoopRun<A> run;
   run.initial = initial;

@@ -32,8 +32,9 @@ class BipedStateEstimator {
   }
 
   // The robot's state as model.hpp lays it out: the estimated base, the joints as read.
-  humanoid::BasicState<0> state() const {
-    const BaseEstimate e = filter_.estimate();
+  humanoid::BasicState<0> state() const { return state(filter_.estimate()); }
+  // The same from an estimate the caller already has from filter().
+  humanoid::BasicState<0> state(const BaseEstimate& e) const {
     humanoid::BasicState<0> x;
     x.q << e.position, e.orientation.w(), e.orientation.x(), e.orientation.y(), e.orientation.z(),
         last_.angles;
