@@ -546,7 +546,7 @@ ClosedLoopRun stand_on(StateFeedback feedback, std::uint64_t seed) {
   config.truncate = false;
   config.feedback = feedback;
   config.sensors.seed = seed;
-  const ClosedLoopRun run = run_closed_loop(test::motion("I-standing"), config);
+  ClosedLoopRun run = run_closed_loop(test::motion("I-standing"), config);
   EXPECT_FALSE(run.fell()) << seed;
   EXPECT_FALSE(run.estimate_lost()) << seed;
   EXPECT_EQ(run.samples.size(), 200u) << seed;
