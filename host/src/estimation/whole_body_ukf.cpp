@@ -17,8 +17,8 @@ constexpr int kN = kUkfErrorSize;
 constexpr int kDp = 0, kDtheta = 3, kDjoint = 6, kDv = 14;
 // Measurement blocks.
 constexpr int kZangle = 0, kZrate = 8, kZgyro = 16, kZaccel = 19, kZp = 22, kZv = 25;
-// q's quaternion (w, x, y, z) and joints.
-constexpr int kQw = 3, kQjoint = 7;
+// q's quaternion (w, x, y, z).
+constexpr int kQw = 3;
 // v's blocks: torso angular, torso linear (torso coordinates), joints.
 constexpr int kVangular = 0, kVlinear = 3, kVjoint = 6;
 
