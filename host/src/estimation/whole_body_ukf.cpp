@@ -170,9 +170,9 @@ void WholeBodyUkf::update(const JointVector& torque, const humanoid::SensorReadi
   } else if (degraded_samples_ > 0) {
     --degraded_samples_;
   }
-  const State saved_state = state_;
-  const Covariance saved_covariance = covariance_;
-  const BaseKalmanFilter saved_base = base_;
+  saved_state_ = state_;
+  saved_covariance_ = covariance_;
+  saved_base_ = base_;
 
   // The base filter runs on the IMU with the attitude the whole-body filter has now.
   base_.propagate(orientation_of(state_).normalized().toRotationMatrix(),
@@ -185,9 +185,9 @@ void WholeBodyUkf::update(const JointVector& torque, const humanoid::SensorReadi
                           base_.velocity().allFinite();
   if (!ok || !finite_now) {
     ++rejected_.state_not_finite;
-    state_ = saved_state;
-    covariance_ = saved_covariance;
-    base_ = saved_base;
+    state_ = saved_state_;
+    covariance_ = saved_covariance_;
+    base_ = saved_base_;
     lost_ = true;
   }
 }

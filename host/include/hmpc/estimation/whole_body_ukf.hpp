@@ -159,6 +159,10 @@ class WholeBodyUkf {
   std::array<State, kSigmaPoints> sigma_{}, propagated_{};
   std::array<ErrorVector, kSigmaPoints> deviation_{};
   std::array<Measurement, kSigmaPoints> predicted_{};
+  // The estimate before an update, restored if the update fails or is not finite.
+  State saved_state_{};
+  Covariance saved_covariance_ = Covariance::Zero();
+  BaseKalmanFilter saved_base_;
   Eigen::Matrix<double, kUkfMeasurementSize, kUkfMeasurementSize> innovation_covariance_;
   Eigen::Matrix<double, kUkfErrorSize, kUkfMeasurementSize> cross_covariance_;
   Eigen::LLT<Covariance> square_root_{Covariance::Identity()};
