@@ -95,6 +95,10 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
       const PhysicalCheck check = check_motion(numeral, motion, run);
       std::printf("physical check of motion %s: %s: %s\n", numeral.c_str(),
                   check.passed ? "PASSED" : "FAILED", check.verdict.c_str());
+    } else if (has_squat(motion)) {
+      const PhysicalCheck check = check_squat(motion, run);
+      std::printf("physical check of the squat: %s: %s\n", check.passed ? "PASSED" : "FAILED",
+                  check.verdict.c_str());
     }
   }
   const std::string title = stem + ", " + name_of(config.mpc) + " MPC";

@@ -122,6 +122,39 @@ TEST(HumanoidPhysicalChecks, WalkingNeedsSpeedAndAlternatingSteps) {
   EXPECT_FALSE(check_motion("II", m, run).passed);
 }
 
+// The slow squat: a base point on the target height passes; one that stands instead (2.4 cm
+// RMS off), lags by an eighth of the period (1.1 cm), lifts a foot or leans over fails.
+TEST(HumanoidPhysicalChecks, SquatFollowsTheTargetHeightOnBothFeet) {
+  const Motion m = motion("slow-squat");
+  ASSERT_TRUE(has_squat(m));
+  EXPECT_FALSE(has_squat(motion("I-standing")));
+  const double period = m.phase_at(m.duration).squat_period;
+  const auto squat = [&](double lag) {
+    ClosedLoopRun run;
+    for (int k = 1; k * kSamplingPeriod <= m.duration; ++k) {
+      const double t = k * kSamplingPeriod;
+      const double z = m.phase_at(std::max(t - lag, 0.0)).height_at(std::max(t - lag, 0.0));
+      run.samples.push_back(sample(t, z, 230.0, 230.0));
+    }
+    return run;
+  };
+  const ClosedLoopRun followed = squat(0.0);
+  EXPECT_TRUE(check_squat(m, followed).passed) << check_squat(m, followed).verdict;
+  EXPECT_FALSE(check_squat(m, squat(period / 8)).passed) << check_squat(m, squat(period / 8)).verdict;
+  ClosedLoopRun stood = followed;
+  for (ClosedLoopSample& s : stood.samples) s.base.position.z() = 0.85;
+  EXPECT_FALSE(check_squat(m, stood).passed);
+  ClosedLoopRun stepped = followed;
+  stepped.samples[200].right_force = 10.0;
+  EXPECT_FALSE(check_squat(m, stepped).passed);
+  ClosedLoopRun leaned = followed;
+  leaned.samples[100].base.quaternion = Eigen::Vector4d(std::cos(0.16), 0.0, std::sin(0.16), 0.0);
+  EXPECT_FALSE(check_squat(m, leaned).passed);  // 0.32 rad
+  ClosedLoopRun early = followed;
+  early.samples.resize(20);  // 0.6 s, before the squat starts
+  EXPECT_FALSE(check_squat(m, early).passed);
+}
+
 TEST(HumanoidPhysicalChecks, MotionNumerals) {
   EXPECT_EQ(motion_numeral("VIII-double-flip"), "VIII");
   EXPECT_EQ(motion_numeral("I-standing"), "I");

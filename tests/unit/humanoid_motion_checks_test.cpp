@@ -1,7 +1,7 @@
-// Physical checks that the humanoid's dynamic motions (II-VIII), whole-body reaching with the
-// robot with an arm, and a push recovery really happen, each a closed-loop run under
-// Coarse-Fast MPC (closed_loop.hpp), untruncated (test::run). Label long: minutes under
-// AddressSanitizer, which CI's host-asan preset skips; host-release runs them.
+// Physical checks that the humanoid's dynamic motions (II-VIII), the slow squat, whole-body
+// reaching with the robot with an arm, and a push recovery really happen, each a closed-loop
+// run under Coarse-Fast MPC (closed_loop.hpp), untruncated (test::run). Label long: minutes
+// under AddressSanitizer, which CI's host-asan preset skips; host-release runs them.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -65,6 +65,16 @@ TEST(HumanoidMotionChecks, CoarseFastJumpsWithAHalfTurn) {
 // the last 0.3 s on its feet, upright, in the standing band.
 TEST(HumanoidMotionChecks, CoarseFastDoesADoubleFlipAndLandsUpright) {
   expect_check_passes("VIII-double-flip");
+}
+
+// The slow squat (Sec. 2.7.3), one squat (5 s of the file's 10): the base point within 1 cm RMS
+// of the sinusoidal height target from the squat's start, both feet loaded, upright.
+TEST(HumanoidMotionChecks, CoarseFastSquatsSlowly) {
+  const Motion m = motion("slow-squat");
+  const ClosedLoopRun r = run(m, MpcKind::kCoarseFast, 5.0);
+  const PhysicalCheck check = check_squat(m, r);
+  std::printf("slow squat, Coarse-Fast: %s\n", check.verdict.c_str());
+  EXPECT_TRUE(check.passed) << check.verdict;
 }
 
 // Reaching (Eq. 2.53): the robot with an arm steps towards the target and brings its hand's

@@ -11,6 +11,7 @@ constexpr double kWeight = 47.0 * 9.81;      // m g [N], thesis Sec. 2.5.1
 constexpr double kUnloaded = 0.1 * kWeight;  // a foot's load below this: off the ground
 constexpr double kStandingHeight = 0.85;     // Table 2.2
 constexpr double kHeightBand = 0.05;
+constexpr double kSquatTolerance = 0.01;  // [m] see physical_checks.hpp
 constexpr double kSettle = 0.3;  // [s] the landing/standing window at the end
 constexpr double kPi = 3.14159265358979323846;
 
@@ -176,6 +177,43 @@ PhysicalCheck jump(const ClosedLoopRun& run, double turn, double pitch_rotations
 }
 
 }  // namespace
+
+bool has_squat(const Motion& motion) {
+  for (int i = 0; i < motion.phase_count; ++i) {
+    if (motion.phases[i].squat_period > 0.0) return true;
+  }
+  return false;
+}
+
+PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run) {
+  if (run.samples.empty()) return {false, "no samples"};
+  if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
+  double squared = 0.0, low = 1e9, target_low = 1e9, worst_tilt = 0.0;
+  int count = 0, unloaded = 0;
+  for (const ClosedLoopSample& s : run.samples) {
+    worst_tilt = std::max(worst_tilt, tilt(s));
+    unloaded += std::min(s.left_force, s.right_force) < kUnloaded ? 1 : 0;
+    const Phase& phase = motion.phase_at(s.time);
+    if (phase.squat_period <= 0.0) continue;
+    const double target = phase.height_at(s.time);
+    squared += (s.base.position.z() - target) * (s.base.position.z() - target);
+    low = std::min(low, s.base.position.z());
+    target_low = std::min(target_low, target);
+    ++count;
+  }
+  PhysicalCheck c;
+  if (count == 0) {
+    c.verdict = "the run ended before the squat started";
+    return c;
+  }
+  const double rms = std::sqrt(squared / count);
+  c.passed = rms <= kSquatTolerance && unloaded == 0 && worst_tilt < 0.3;
+  c.verdict = format(
+      "base point %.1f mm RMS from the squat's target height (required <= %.0f), down to %.3f m "
+      "(target %.3f m); %.0f samples with a foot unloaded (required 0); tilt up to %.2f rad",
+      1e3 * rms, 1e3 * kSquatTolerance, low, target_low, unloaded, worst_tilt);
+  return c;
+}
 
 std::string motion_numeral(const std::string& name) {
   const std::size_t dash = name.find('-');

@@ -16,6 +16,11 @@
 //         turned by pi +- 0.3 rad; VII's apex above V's (checked across runs by the caller);
 //   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
 //         full rotations), a flight phase, and an upright landing as for V-VII;
+//   squat (a phase with a sinusoidal height target: Sec. 2.7.3's slow squat): from the squat's
+//         start on, the base point's RMS deviation from the target height at most 1 cm (a
+//         quarter of our 4 cm squat: a robot that stands instead is 2.4 cm off, one lagging by
+//         an eighth of the period 1.1 cm), both feet loaded at every sample (the squat keeps its
+//         soles down) and the torso tilt below 0.3 rad (upright, as a landing);
 //   reaching (Sec. 2.6.1, Eq. 2.53; the robot with an arm): the hand's centre within 5 cm of
 //         the target at a sample after the reach starts (5 cm: a hand's half-width, so the
 //         palm touches a ball there).
@@ -39,6 +44,10 @@ std::string motion_numeral(const std::string& name);
 // The check for motion `numeral` (I..VIII). An unknown numeral fails with a verdict saying so.
 PhysicalCheck check_motion(const std::string& numeral, const Motion& motion,
                            const ClosedLoopRun& run);
+
+// Whether `motion` has a squat phase, and its check (above).
+bool has_squat(const Motion& motion);
+PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run);
 
 // The highest base point of a run [m] (VII against V).
 double apex_height(const ClosedLoopRun& run);
