@@ -247,12 +247,22 @@ TEST(InvariantEkf, StandingStillMeetsTheTargetsAndFindsTheGyroscopeBias) {
   }
 }
 
+const char* name_of(Contact contact) {
+  return contact == Contact::kFromForces ? "contact from the forces" : "contact from the legs";
+}
+
 // The thesis's slow squat (Sec. 2.7.3): 4 cm at 0.25 Hz, both soles on the compliant ground,
-// rocking onto their heels at the bottom.
+// rocking onto their heels at the bottom; which feet stand from the simulator's forces or, as
+// a robot without force sensors knows it, from the legs (InvariantEkfConfig's
+// touchdown_height).
 TEST(InvariantEkf, SlowSquattingMeetsTheTargets) {
-  const Errors e = run_filter(record("slow-squat", 10.0, 24), kRestSeconds);
-  print("slow squat", e);
-  expect_within_targets(e);
+  const Recording r = record("slow-squat", 10.0, 24);
+  for (const Contact contact : {Contact::kFromForces, Contact::kFromLegs}) {
+    SCOPED_TRACE(name_of(contact));
+    const Errors e = run_filter(r, kRestSeconds, contact);
+    print((std::string("slow squat, ") + name_of(contact)).c_str(), e);
+    expect_within_targets(e);
+  }
 }
 
 // A robot standing still in the MPC's standing posture, its filter started after a 0.1 s rest;
@@ -262,7 +272,7 @@ struct StandingStill {
   sensors::ImuModel imu{sensors::bmi088(kDt), 5};
   est::InvariantEkf filter;
 
-  StandingStill() {
+  explicit StandingStill(const est::InvariantEkfConfig& config = {}) : filter({}, config) {
     est::ImuRest rest;
     for (int k = 0; k < 100; ++k) rest.add(read(), kDt);
     filter.initialize_at_rest(rest, angles());
@@ -428,36 +438,30 @@ TEST(InvariantEkf, GarbageInputNeverMakesTheEstimateNonFinite) {
   }
 }
 
-// Walking and a jump land on heels and roll onto toes; the jump has a flight phase. Height and
-// velocity within the targets. Tilt within the target plus what no filter can see at the
-// start: the accelerometer's horizontal power-up offset b reads at rest as a tilt of
-// atan(|b_xy| / g) (BMI088: 20 mg, 1.15 degrees per axis), which only motion reveals, slowly
-// on a straight walk (its yaw never turns the offset against gravity).
+// Walking and a jump land on heels and roll onto toes; the jump has a flight phase. Contact
+// from the forces or from the legs (and the IMU: flight_force). Height and velocity within the
+// targets. Tilt within the target plus what no filter can see at the start: the
+// accelerometer's horizontal power-up offset b reads at rest as a tilt of atan(|b_xy| / g)
+// (BMI088: 20 mg, 1.15 degrees per axis), which only motion reveals, slowly on a straight walk
+// (its yaw never turns the offset against gravity). Walking with contact from the legs is also
+// held to the target itself (0.93 degrees measured; the jump's, 0.9-1.4 over four seeds, is not).
 TEST(InvariantEkf, WalkingAndALowJumpMeetTheTargets) {
   for (const char* motion : {"II-walking", "V-low-jump"}) {
-    SCOPED_TRACE(motion);
     const Recording r = record(motion, 6.0, 22);
-    const Errors e = run_filter(r, kRestSeconds);
-    print(motion, e);
     const double hidden = std::atan(r.accelerometer_bias.front().head<2>().norm() / 9.81);
     std::printf("%s: the offset's hidden tilt %.3f deg\n", motion, hidden * 180 / M_PI);
-    EXPECT_LT(e.height_rms, 0.01);
-    EXPECT_LT(e.horizontal_velocity_rms, 0.05);
-    EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180 + hidden);
+    for (const Contact contact : {Contact::kFromForces, Contact::kFromLegs}) {
+      SCOPED_TRACE(std::string(motion) + ", " + name_of(contact));
+      const Errors e = run_filter(r, kRestSeconds, contact);
+      print((std::string(motion) + ", " + name_of(contact)).c_str(), e);
+      EXPECT_LT(e.height_rms, 0.01);
+      EXPECT_LT(e.horizontal_velocity_rms, 0.05);
+      EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180 + hidden);
+      if (contact == Contact::kFromLegs && motion == std::string("II-walking")) {
+        EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180);
+      }
+    }
   }
-}
-
-// Without force sensors, which feet stand comes from the legs (InvariantEkfConfig's
-// touchdown_height): the same targets on the slow squat and on walking. Not on the jump yet:
-// its tilt error is 1.8 degrees with contact from the legs (0.9 with the simulator's).
-TEST(InvariantEkf, ContactFromTheLegsMeetsTheTargetsOnTheSlowSquatAndWalking) {
-  const Errors squat = run_filter(record("slow-squat", 10.0, 24), kRestSeconds, Contact::kFromLegs);
-  print("slow squat, contact from the legs", squat);
-  expect_within_targets(squat);
-  const Recording r = record("II-walking", 6.0, 22);
-  const Errors walking = run_filter(r, kRestSeconds, Contact::kFromLegs);
-  print("walking, contact from the legs", walking);
-  expect_within_targets(walking);
 }
 
 // A robot standing still lifts its left foot (hip and knee flexed a further 0.4 and 0.8 rad,
@@ -486,6 +490,67 @@ TEST(InvariantEkf, ContactFromTheLegsSeesAFootLiftedAndSetDown) {
   filter.correct(robot.angles(), JointVector::Zero());
   EXPECT_TRUE(filter.estimate().stance[0]);
   EXPECT_TRUE(filter.estimate().stance[1]);
+}
+
+// The IMU overrules the legs (InvariantEkfConfig::flight_force). Reading a free fall's specific
+// force, no foot stands though the legs put both soles on the ground. Landing with both feet
+// above liftoff_height in the estimate (a flight's end, a push-off on the toes), the lower one
+// stands while within support_reach: the right foot drawn up about 2 cm stands (and would not
+// without the rule), drawn up 6 cm it does not; the left, 17 cm up, never.
+TEST(InvariantEkf, TheImuTellsAFlightFromAStance) {
+  const sensors::ImuTruth free_fall{Vector3::Zero(), Vector3::Zero()};
+  {
+    StandingStill robot;
+    for (int k = 0; k < 200; ++k) {
+      robot.filter.propagate(robot.read(), kDt);
+      robot.filter.correct(robot.angles(), JointVector::Zero());
+    }
+    robot.filter.propagate(robot.imu.measure(free_fall), kDt);
+    robot.filter.correct(robot.angles(), JointVector::Zero());
+    EXPECT_FALSE(robot.filter.estimate().stance[0]);
+    EXPECT_FALSE(robot.filter.estimate().stance[1]);
+    robot.filter.propagate(robot.read(), kDt);
+    robot.filter.correct(robot.angles(), JointVector::Zero());
+    EXPECT_TRUE(robot.filter.estimate().stance[0]);
+    EXPECT_TRUE(robot.filter.estimate().stance[1]);
+  }
+  // Stands still, takes off with its legs drawn up, lands with them so: which feet stand, and
+  // the right stance point's height above where it stood.
+  const auto land = [&](double right_flexion, double reach, double* rise) {
+    est::InvariantEkfConfig config;
+    config.support_reach = reach;
+    StandingStill robot(config);
+    for (int k = 0; k < 200; ++k) {
+      robot.filter.propagate(robot.read(), kDt);
+      robot.filter.correct(robot.angles(), JointVector::Zero());
+    }
+    const double stood = robot.filter.estimate().stance_points[1].z();
+    JointVector drawn = robot.angles();
+    drawn[kHipFlexion] += 0.4;
+    drawn[kKnee] += 0.8;
+    drawn[kAnkle] += 0.4;
+    drawn[kJointsPerLeg + kHipFlexion] += right_flexion;
+    drawn[kJointsPerLeg + kKnee] += 2 * right_flexion;
+    drawn[kJointsPerLeg + kAnkle] += right_flexion;
+    robot.filter.propagate(robot.imu.measure(free_fall), kDt);
+    robot.filter.correct(drawn, JointVector::Zero());
+    robot.filter.propagate(robot.read(), kDt);
+    robot.filter.correct(drawn, JointVector::Zero());
+    *rise = robot.filter.estimate().stance_points[1].z() - stood;
+    return robot.filter.estimate().stance;
+  };
+  double rise = 0;
+  const est::InvariantEkfConfig defaults;
+  const std::array<bool, est::kFeet> near = land(0.07, defaults.support_reach, &rise);
+  EXPECT_GT(rise, defaults.liftoff_height);
+  EXPECT_LT(rise, defaults.support_reach);
+  EXPECT_FALSE(near[0]);
+  EXPECT_TRUE(near[1]);
+  EXPECT_FALSE(land(0.07, 0.0, &rise)[1]);
+  const std::array<bool, est::kFeet> far = land(0.2, defaults.support_reach, &rise);
+  EXPECT_GT(rise, defaults.support_reach);
+  EXPECT_FALSE(far[0]);
+  EXPECT_FALSE(far[1]);
 }
 
 TEST(InvariantEkf, AnUpdateAllocatesNothing) {

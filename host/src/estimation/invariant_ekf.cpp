@@ -175,6 +175,7 @@ void InvariantEkf::propagate(const sensors::ImuReading& imu, double dt) {
 
 void InvariantEkf::integrate(const Vector3& w, const Vector3& a, double dt) {
   last_rate_ = w;
+  last_specific_force_ = a;
   const Matrix3 r = rotation_;
   const Vector3 v = velocity_, p = position_;
   const Vector3 acceleration = r * a + model_.gravity;  // world
@@ -276,13 +277,21 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
   // single stance foot is trusted (the innovation gate still rejects a jump).
   std::array<Vector3, kFeet> relative{};
   std::array<std::uint8_t, kFeet> support{};
+  std::array<double, kFeet> heights{};
   for (int foot = 0; foot < kFeet; ++foot) {
     support[foot] = support_corners(foot);
     foot_[foot] = mean_of_corners(foot, support[foot], &foot_velocity_[foot]);
     relative[foot] = rotation_ * (last_rate_.cross(foot_[foot]) + foot_velocity_[foot]);
-    const double height = position_.z() + rotation_.row(2).dot(foot_[foot]);
+    heights[foot] = position_.z() + rotation_.row(2).dot(foot_[foot]);
     on_ground_[foot] =
-        height < (on_ground_[foot] ? config_.liftoff_height : config_.touchdown_height);
+        heights[foot] < (on_ground_[foot] ? config_.liftoff_height : config_.touchdown_height);
+  }
+  // The IMU overrules the legs: none stands in flight, one stands when not (flight_force).
+  if (last_specific_force_.norm() < config_.flight_force) {
+    on_ground_ = {false, false};
+  } else if (!on_ground_[0] && !on_ground_[1]) {
+    const int lower = heights[0] < heights[1] ? 0 : 1;
+    on_ground_[lower] = heights[lower] < config_.support_reach;
   }
   const std::array<bool, kFeet>& stance = asked != nullptr ? *asked : on_ground_;
   const bool both = stance[0] && stance[1];
