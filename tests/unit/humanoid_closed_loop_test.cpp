@@ -140,7 +140,8 @@ TEST(HumanoidPhysicalChecks, SquatFollowsTheTargetHeightOnBothFeet) {
   };
   const ClosedLoopRun followed = squat(0.0);
   EXPECT_TRUE(check_squat(m, followed).passed) << check_squat(m, followed).verdict;
-  EXPECT_FALSE(check_squat(m, squat(period / 8)).passed) << check_squat(m, squat(period / 8)).verdict;
+  EXPECT_FALSE(check_squat(m, squat(period / 8)).passed)
+      << check_squat(m, squat(period / 8)).verdict;
   ClosedLoopRun stood = followed;
   for (ClosedLoopSample& s : stood.samples) s.base.position.z() = 0.85;
   EXPECT_FALSE(check_squat(m, stood).passed);

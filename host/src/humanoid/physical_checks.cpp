@@ -12,7 +12,7 @@ constexpr double kUnloaded = 0.1 * kWeight;  // a foot's load below this: off th
 constexpr double kStandingHeight = 0.85;     // Table 2.2
 constexpr double kHeightBand = 0.05;
 constexpr double kSquatTolerance = 0.01;  // [m] see physical_checks.hpp
-constexpr double kSettle = 0.3;  // [s] the landing/standing window at the end
+constexpr double kSettle = 0.3;           // [s] the landing/standing window at the end
 constexpr double kPi = 3.14159265358979323846;
 
 template <class... Numbers>

@@ -210,7 +210,7 @@ class InvariantEkf {
   std::array<Vector3, kFeet> stance_point_{};
   Vector3 gyroscope_bias_ = Vector3::Zero();
   Vector3 accelerometer_bias_ = Vector3::Zero();
-  Vector3 last_rate_ = Vector3::Zero();  // bias-corrected, for the estimate
+  Vector3 last_rate_ = Vector3::Zero();            // bias-corrected, for the estimate
   Vector3 last_specific_force_ = Vector3::Zero();  // bias-corrected, for contact
   std::array<bool, kFeet> stance_{};
   std::array<bool, kFeet> slipping_{};
