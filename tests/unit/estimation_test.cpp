@@ -279,6 +279,13 @@ struct StandingStill {
   }
   sensors::ImuReading read() { return imu.measure({Vector3::Zero(), Vector3(0, 0, 9.81)}); }
   JointVector angles() const { return x.q.tail<kJoints>(); }
+  // `n` samples standing, which feet stand inferred from the legs.
+  void stand_on_legs(int n) {
+    for (int k = 0; k < n; ++k) {
+      filter.propagate(read(), kDt);
+      filter.correct(angles(), JointVector::Zero());
+    }
+  }
   // `n` samples of the legs standing.
   void stand(int n) {
     for (int k = 0; k < n; ++k) {
@@ -471,10 +478,7 @@ TEST(InvariantEkf, WalkingAndALowJumpMeetTheTargets) {
 TEST(InvariantEkf, ContactFromTheLegsSeesAFootLiftedAndSetDown) {
   StandingStill robot;
   est::InvariantEkf& filter = robot.filter;
-  for (int k = 0; k < 200; ++k) {
-    filter.propagate(robot.read(), kDt);
-    filter.correct(robot.angles(), JointVector::Zero());
-  }
+  robot.stand_on_legs(200);
   EXPECT_TRUE(filter.estimate().stance[0]);
   JointVector lifted = robot.angles();
   lifted[kHipFlexion] += 0.4;
@@ -501,10 +505,7 @@ TEST(InvariantEkf, TheImuTellsAFlightFromAStance) {
   const sensors::ImuTruth free_fall{Vector3::Zero(), Vector3::Zero()};
   {
     StandingStill robot;
-    for (int k = 0; k < 200; ++k) {
-      robot.filter.propagate(robot.read(), kDt);
-      robot.filter.correct(robot.angles(), JointVector::Zero());
-    }
+    robot.stand_on_legs(200);
     robot.filter.propagate(robot.imu.measure(free_fall), kDt);
     robot.filter.correct(robot.angles(), JointVector::Zero());
     EXPECT_FALSE(robot.filter.estimate().stance[0]);
@@ -520,10 +521,7 @@ TEST(InvariantEkf, TheImuTellsAFlightFromAStance) {
     est::InvariantEkfConfig config;
     config.support_reach = reach;
     StandingStill robot(config);
-    for (int k = 0; k < 200; ++k) {
-      robot.filter.propagate(robot.read(), kDt);
-      robot.filter.correct(robot.angles(), JointVector::Zero());
-    }
+    robot.stand_on_legs(200);
     const double stood = robot.filter.estimate().stance_points[1].z();
     JointVector drawn = robot.angles();
     drawn[kHipFlexion] += 0.4;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 namespace hmpc::humanoid {
 namespace {
@@ -176,6 +177,14 @@ PhysicalCheck jump(const ClosedLoopRun& run, double turn, double pitch_rotations
   return c;
 }
 
+// The failed check of a run that cannot be judged (no samples, a fall); none otherwise.
+template <int A>
+std::optional<PhysicalCheck> ended_early(const BasicClosedLoopRun<A>& run) {
+  if (run.samples.empty()) return PhysicalCheck{false, "no samples"};
+  if (run.fell()) return PhysicalCheck{false, format("fell at %.2f s", run.fell_at)};
+  return std::nullopt;
+}
+
 }  // namespace
 
 bool has_squat(const Motion& motion) {
@@ -186,8 +195,7 @@ bool has_squat(const Motion& motion) {
 }
 
 PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run) {
-  if (run.samples.empty()) return {false, "no samples"};
-  if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
+  if (const std::optional<PhysicalCheck> early = ended_early(run)) return *early;
   double squared = 0.0, low = 1e9, target_low = 1e9, worst_tilt = 0.0;
   int count = 0, unloaded = 0;
   for (const ClosedLoopSample& s : run.samples) {
@@ -232,8 +240,7 @@ double apex_height(const ClosedLoopRun& run) {
 
 PhysicalCheck check_motion(const std::string& numeral, const Motion& motion,
                            const ClosedLoopRun& run) {
-  if (run.samples.empty()) return {false, "no samples"};
-  if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
+  if (const std::optional<PhysicalCheck> early = ended_early(run)) return *early;
   if (numeral == "I") return standing(run);
   if (numeral == "II") return locomotion(motion, run, false);
   if (numeral == "III") return locomotion(motion, run, true);
@@ -260,8 +267,7 @@ ReachFigures reach_figures(const Motion& motion, const ArmClosedLoopRun& run) {
 }
 
 PhysicalCheck check_reaching(const Motion& motion, const ArmClosedLoopRun& run) {
-  if (run.samples.empty()) return {false, "no samples"};
-  if (run.fell()) return {false, format("fell at %.2f s", run.fell_at)};
+  if (const std::optional<PhysicalCheck> early = ended_early(run)) return *early;
   const ReachFigures f = reach_figures(motion, run);
   if (f.closest < 0.0) return {false, "the run ended before the reach started"};
   const std::string closest =
