@@ -41,7 +41,8 @@ void usage(std::FILE* out) {
       "                      from a simulated BMI088 IMU and the joint encoders, after\n"
       "                      a 0.5 s rest; the UKF also takes the applied torques;\n"
       "                      biped motions, started at rest); writes estimation.csv\n"
-      "                      and estimation.png\n"
+      "                      and estimation.png; or true-base (the simulator's base\n"
+      "                      with the encoders' angles and the boards' velocities)\n"
       "  --sensor-seed N     the simulated sensors' noise and biases, 0..2^31 (default 1)\n"
       "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
       "ground), %d the estimate was lost (the MPC stopped), 2 bad arguments or motion\n"
@@ -154,7 +155,8 @@ int main(int argc, char** argv) {
   parser.text("--estimator", [&](const std::string& v) {
     return parse_state_feedback(v, config.feedback)
                ? std::string()
-               : hmpc::cli::bad_value("--estimator", "truth, invariant-ekf or whole-body-ukf", v);
+               : hmpc::cli::bad_value("--estimator",
+                                      "truth, invariant-ekf, whole-body-ukf or true-base", v);
   });
   int seed = 1;
   parser.integer("--sensor-seed", 0, 2147483647, seed);

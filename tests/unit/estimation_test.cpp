@@ -693,6 +693,38 @@ TEST(ClosedLoopThroughTheEstimator, TheLowJumpOnTheWholeBodyUkfPassesOnEverySeed
   }
 }
 
+// A perfect base estimator (StateFeedback::kTrueBase), to tell what the joint sensors alone cost
+// the closed loop: at every sampling instant the MPC gets the simulator's base exactly and the
+// joints as the encoders count them (the nearest count) with the boards' filtered rates.
+TEST(ClosedLoopThroughTheEstimator, TheTrueBaseGivesTheSimulatorsBaseWithTheSensorsJoints) {
+  StateFeedback named = StateFeedback::kTruth;
+  ASSERT_TRUE(parse_state_feedback("true-base", named));
+  EXPECT_EQ(named, StateFeedback::kTrueBase);
+  ClosedLoopConfig config;
+  config.duration = 1.5;
+  config.truncate = false;
+  config.feedback = StateFeedback::kTrueBase;
+  const ClosedLoopRun run = run_closed_loop(test::motion("II-walking"), config);
+  ASSERT_EQ(run.samples.size(), 50u);
+  const hmpc::sensors::EncoderConfig encoder = config.sensors.encoder;
+  double rate_error = 0.0;
+  for (std::size_t k = 1; k < run.samples.size(); ++k) {
+    const State& truth = run.samples[k - 1].state;  // at the period's start
+    const State& given = run.samples[k].feedback;
+    EXPECT_EQ(given.q.head<kConfigurationSize - kJoints>(),
+              truth.q.head<kConfigurationSize - kJoints>())
+        << k;
+    EXPECT_EQ(given.v.head<kBaseDofs>(), truth.v.head<kBaseDofs>()) << k;
+    for (int j = 0; j < kJoints; ++j) {
+      const int i = kConfigurationSize - kJoints + j;
+      EXPECT_EQ(given.q[i], hmpc::sensors::quantise(encoder, truth.q[i])) << k << ", " << j;
+      rate_error = std::max(rate_error, std::abs(given.v[kBaseDofs + j] - truth.v[kBaseDofs + j]));
+    }
+  }
+  // Walking's joints accelerate: the boards' 50 Hz filter lags them.
+  EXPECT_GT(rate_error, 0.01);
+}
+
 }  // namespace
 
 namespace {

@@ -10,8 +10,8 @@ namespace hmpc::humanoid {
 namespace {
 
 constexpr const char* kNames[kMpcKinds] = {"fine", "coarse", "coarse-fast"};
-constexpr const char* kFeedbackNames[kStateFeedbacks] = {"truth", "invariant-ekf",
-                                                         "whole-body-ukf"};
+constexpr const char* kFeedbackNames[kStateFeedbacks] = {"truth", "invariant-ekf", "whole-body-ukf",
+                                                         "true-base"};
 
 // The enumerator whose name, in `names` (the enumerators' order), is `name`.
 template <class Enum, int N>

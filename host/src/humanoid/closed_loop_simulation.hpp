@@ -148,7 +148,8 @@ void add_vertical_forces(const BasicContactState<A>& contact, double weight,
 }
 
 // What the MPC is given (ClosedLoopConfig::feedback): the truth, or an estimator on the biped's
-// simulated sensors, which read the plant every simulator step.
+// simulated sensors, which read the plant every simulator step, or the true base with the
+// sensors' joints.
 template <int A>
 class Feedback {
  public:
@@ -163,7 +164,7 @@ class Feedback {
         estimation::InvariantEkfConfig filter;
         filter.contact = contact;
         estimator_.emplace(config.problem.parameters, filter);
-      } else {
+      } else if (config.feedback == StateFeedback::kWholeBodyUkf) {
         estimation::WholeBodyUkfConfig filter;
         filter.contact = contact;
         ukf_.emplace(config.problem.parameters, filter);
@@ -173,14 +174,13 @@ class Feedback {
       const BasicVelocity<A> still = BasicVelocity<A>::Zero();
       const int samples = static_cast<int>(std::lround(config.rest_seconds / kSimulatorStep));
       estimation::ImuRest rest;
-      SensorReadings reading;
       for (int k = 0; k < samples; ++k) {
-        reading = sensors_->measure(initial.q, still, still);
-        if (estimator_) estimator_->rest(reading, kSimulatorStep);
-        rest.add(reading.imu, kSimulatorStep);
+        reading_ = sensors_->measure(initial.q, still, still);
+        if (estimator_) estimator_->rest(reading_, kSimulatorStep);
+        rest.add(reading_.imu, kSimulatorStep);
       }
       if (estimator_) estimator_->start();
-      if (ukf_) ukf_->initialize_at_rest(rest, reading.angles);
+      if (ukf_) ukf_->initialize_at_rest(rest, reading_.angles);
     }
   }
 
@@ -188,9 +188,9 @@ class Feedback {
   void step(const BasicState<A>& x, const BasicVelocity<A>& a, const BasicJointVector<A>& u) {
     if constexpr (A == 0) {
       if (!sensors_) return;
-      const SensorReadings reading = sensors_->measure(x.q, x.v, a);
-      if (estimator_) estimator_->update(reading, kSimulatorStep);
-      if (ukf_) ukf_->update(u, reading, kSimulatorStep);
+      reading_ = sensors_->measure(x.q, x.v, a);
+      if (estimator_) estimator_->update(reading_, kSimulatorStep);
+      if (ukf_) ukf_->update(u, reading_, kSimulatorStep);
     }
   }
 
@@ -199,6 +199,7 @@ class Feedback {
     if constexpr (A == 0) {
       if (estimator_) return estimator_->state();
       if (ukf_) return ukf_->state();
+      if (sensors_) return with_sensed_joints(truth);
     }
     return truth;
   }
@@ -206,6 +207,10 @@ class Feedback {
   // The same, with its spread and trust, into `sample`.
   void give(const BasicState<A>& truth, BasicClosedLoopSample<A>& sample) const {
     if constexpr (A == 0) {
+      if (sensors_ && !estimator_ && !ukf_) {
+        sample.feedback = with_sensed_joints(truth);
+        return;
+      }
       if (sensors_) {
         const estimation::BaseEstimate e =
             estimator_ ? estimator_->filter().estimate() : ukf_->estimate();
@@ -219,7 +224,15 @@ class Feedback {
   }
 
  private:
+  // `truth`'s base with the last reading's joints.
+  BasicState<A> with_sensed_joints(BasicState<A> truth) const {
+    truth.q.template tail<kJoints>() = reading_.angles;
+    truth.v.template tail<kJoints>() = reading_.rates;
+    return truth;
+  }
+
   std::optional<BipedSensors> sensors_;
+  SensorReadings reading_;
   std::optional<estimation::BipedStateEstimator> estimator_;
   std::optional<estimation::WholeBodyUkf> ukf_;
 };

@@ -32,9 +32,12 @@ bool parse_mpc_kind(const std::string& name, MpcKind& kind);
 // encoders and boards' velocities (hmpc/humanoid/sensors.hpp): the contact-aided invariant EKF
 // (hmpc/estimation/biped_state_estimator.hpp) or the thesis's whole-body UKF with its base
 // Kalman filter (hmpc/estimation/whole_body_ukf.hpp), which also takes the applied torques.
-enum class StateFeedback { kTruth, kInvariantEkf, kWholeBodyUkf };
-constexpr int kStateFeedbacks = 3;
-// "truth", "invariant-ekf", "whole-body-ukf".
+// And, to tell what an estimator's error costs the closed loop from what the joint sensors'
+// does, the simulator's base (a perfect base estimator) with the encoders' angles and the
+// boards' velocities.
+enum class StateFeedback { kTruth, kInvariantEkf, kWholeBodyUkf, kTrueBase };
+constexpr int kStateFeedbacks = 4;
+// "truth", "invariant-ekf", "whole-body-ukf", "true-base".
 const char* name_of(StateFeedback feedback);
 bool parse_state_feedback(const std::string& name, StateFeedback& feedback);
 
