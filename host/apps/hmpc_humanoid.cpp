@@ -44,6 +44,10 @@ void usage(std::FILE* out) {
       "                      and estimation.png; or true-base (the simulator's base\n"
       "                      with the encoders' angles and the boards' velocities)\n"
       "  --sensor-seed N     the simulated sensors' noise and biases, 0..2^31 (default 1)\n"
+      "  --iteration-cap N   iLQR iterations per sample (Coarse-Fast: per layer), 1..1000\n"
+      "                      (default: Table 2.4's 6, reaching Sec. 2.6.2's 4)\n"
+      "  --model-slip-velocity V  the slip velocity of the MPC's friction law [m/s],\n"
+      "                      0.001..1 (default: the simulated plant's 0.01)\n"
       "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
       "ground), %d the estimate was lost (the MPC stopped), 2 bad arguments or motion\n"
       "file, 1 the log or pictures could not be written\n",
@@ -160,6 +164,9 @@ int main(int argc, char** argv) {
   });
   int seed = 1;
   parser.integer("--sensor-seed", 0, 2147483647, seed);
+  parser.integer("--iteration-cap", 1, 1000, config.iteration_cap);
+  parser.number("--model-slip-velocity", 0.001, 1.0, "m/s in 0.001..1",
+                config.problem.model_slip_velocity);
   parser.flag("--no-warm-start", no_warm_start);
   parser.flag("--no-truncate", no_truncate);
   std::string error;

@@ -221,6 +221,44 @@ TEST(HumanoidClosedLoop, RejectsBadConfigurations) {
   EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
 }
 
+// The MPC's model may widen the friction's slip velocity (ProblemConfig::model_slip_velocity);
+// the plant keeps contact.hpp's, and a slip velocity outside 0..1 m/s is refused.
+TEST(HumanoidClosedLoop, TheModelsSlipVelocityIsTheMpcsAlone) {
+  const Motion m = motion("I-standing");
+  ProblemConfig config;
+  EXPECT_EQ(model_config(m, config).contact.slip_velocity, ContactParameters{}.slip_velocity);
+  config.model_slip_velocity = 0.03;
+  EXPECT_EQ(model_config(m, config).contact.slip_velocity, 0.03);
+  EXPECT_EQ(model_config(m, config).contact.friction, ContactParameters{}.friction);
+  ClosedLoopConfig loop;
+  loop.duration = 0.03;
+  for (const double bad : {-0.01, 1.5, static_cast<double>(NAN)}) {
+    loop.problem.model_slip_velocity = bad;
+    EXPECT_THROW(run_closed_loop(m, loop), std::invalid_argument) << bad;
+  }
+}
+
+// ClosedLoopConfig::iteration_cap caps Coarse-Fast's layers too. From zero torques (no warm
+// start) the first solve needs several iterations, so an unheeded cap of one would show.
+TEST(HumanoidClosedLoop, TheIterationCapHoldsForEachLayer) {
+  const Motion m = motion("I-standing");
+  ClosedLoopConfig config;
+  config.duration = 0.09;
+  config.threads = 1;
+  config.truncate = false;
+  config.warm_start = false;
+  const ClosedLoopRun free = run_closed_loop(m, config);
+  ASSERT_FALSE(free.samples.empty());
+  EXPECT_GT(free.samples[0].iterations, 1);
+  config.iteration_cap = 1;
+  const ClosedLoopRun capped = run_closed_loop(m, config);
+  ASSERT_EQ(capped.samples.size(), 3u);
+  for (const ClosedLoopSample& s : capped.samples) {
+    EXPECT_EQ(s.iterations, 1) << s.time;
+    EXPECT_LE(s.fast_iterations, 1) << s.time;
+  }
+}
+
 // The benchmark's perturbed starts: the whole robot moving at the start, joints at rest.
 TEST(HumanoidClosedLoop, ANudgedStartMovesTheRobot) {
   const Motion m = motion("I-standing");

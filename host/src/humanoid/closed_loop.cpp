@@ -54,6 +54,9 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   if (config.iteration_cap < 0 || config.iteration_cap > 1000) {
     throw std::invalid_argument("closed loop: the iteration cap must be in 0..1000");
   }
+  if (!(config.problem.model_slip_velocity >= 0.0 && config.problem.model_slip_velocity <= 1.0)) {
+    throw std::invalid_argument("closed loop: the model's slip velocity must be within 0..1 m/s");
+  }
   if (!(config.start_height > 0.3 && config.start_height < 1.5)) {
     throw std::invalid_argument("closed loop: the start height must be within 0.3..1.5 m");
   }

@@ -11,7 +11,7 @@ IlqrConfig<double> layer_solver(const Motion& motion) {
 template <int A>
 std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
                                                      const BasicState<A>& initial, ThreadPool* pool,
-                                                     ProblemConfig config) {
+                                                     ProblemConfig config, int iteration_cap) {
   using CoarseFast = BasicCoarseFast<A>;
   config = model_config(motion, config);
   ProblemConfig coarse = config, fast = config;
@@ -22,6 +22,7 @@ std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
   mpc.samples_per_upper_step = 1;  // sampling period = Delta t_c
   mpc.state_hold = CoarseFast::Config::StateHold::kLinear;
   mpc.upper = layer_solver(motion);
+  if (iteration_cap > 0) mpc.upper.max_iterations = iteration_cap;
   mpc.fast = mpc.upper;
   return std::make_unique<CoarseFast>(
       HumanoidProblem<kCoarseHorizon, A>(motion, initial, coarse, pool),
@@ -29,8 +30,8 @@ std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
 }
 
 template std::unique_ptr<BasicCoarseFast<0>> make_coarse_fast(const Motion&, const BasicState<0>&,
-                                                              ThreadPool*, ProblemConfig);
+                                                              ThreadPool*, ProblemConfig, int);
 template std::unique_ptr<BasicCoarseFast<1>> make_coarse_fast(const Motion&, const BasicState<1>&,
-                                                              ThreadPool*, ProblemConfig);
+                                                              ThreadPool*, ProblemConfig, int);
 
 }  // namespace hmpc::humanoid

@@ -155,6 +155,7 @@ ContactParameters contact_for(const Motion& motion, ContactParameters contact) {
 ProblemConfig model_config(const Motion& motion, ProblemConfig config) {
   config.contact = contact_for(motion, config.contact);
   if (motion.model_substep > 0.0) config.max_substep = motion.model_substep;
+  if (config.model_slip_velocity > 0.0) config.contact.slip_velocity = config.model_slip_velocity;
   return config;
 }
 

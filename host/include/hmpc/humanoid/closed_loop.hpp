@@ -70,9 +70,9 @@ struct ClosedLoopConfig {
   // The base point's height in the starting stance [m]: another body (a demonstrator with longer
   // legs, hmpc/ioc/demonstrator.hpp) stands at its own.
   double start_height = kStartHeight;
-  // The Fine and Coarse MPCs' iLQR iteration cap per sample; 0: Table 2.4's (kIterationCap).
-  // More makes each plan nearer a local optimum of its cost, as the human demonstrator's
-  // (hmpc/ioc/demonstrator.hpp) should be; Coarse-Fast keeps its own.
+  // The iLQR iteration cap per sample (Coarse-Fast: each layer's); 0: Table 2.4's
+  // (kIterationCap). More makes each plan nearer a local optimum of its cost, as the human
+  // demonstrator's (hmpc/ioc/demonstrator.hpp) should be.
   int iteration_cap = 0;
   // Keep every 1 ms simulator step (BasicClosedLoopRun::milliseconds): recorded truth for the
   // state estimator's sensors and checks.
@@ -146,7 +146,8 @@ using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 // Runs `motion` from standing_state at ClosedLoopConfig::start_height, on the biped (A = 0) or, for
 // a reaching motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument
 // for a negative or non-finite duration, threads outside 1..64, an iteration cap outside 0..1000, a
-// start height outside 0.3..1.5 m, or a motion that needs the other robot; with an estimator,
+// start height outside 0.3..1.5 m, a model slip velocity outside 0..1 m/s, or a motion that
+// needs the other robot; with an estimator,
 // for the robot with an arm (the estimator knows the biped), a moving start, or a rest outside
 // 0.01..10 s.
 template <int A = 0>

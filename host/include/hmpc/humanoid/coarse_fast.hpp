@@ -44,10 +44,12 @@ using CoarseFast = BasicCoarseFast<0>;
 // with the linear hold it stands for 5 s (|nu| at most 8.8 N m on a joint, in the first sample).
 // Moving the held base with its own velocity instead (Eq. 2.51a) fell as well.
 // The MPC for `motion` from `initial` (`config`'s step is overridden per layer, its contact
-// gets the motion's chair). `pool` may be null (serial) and must outlive the MPC.
+// gets the motion's chair), each layer capped at `iteration_cap` iLQR iterations per update (0:
+// layer_solver's). `pool` may be null (serial) and must outlive the MPC.
 template <int A>
 std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
                                                      const BasicState<A>& initial, ThreadPool* pool,
-                                                     ProblemConfig config = ProblemConfig{});
+                                                     ProblemConfig config = ProblemConfig{},
+                                                     int iteration_cap = 0);
 
 }  // namespace hmpc::humanoid

@@ -91,6 +91,11 @@ struct ProblemConfig {
   Vector3 base_point = Vector3(0.0, 0.0, 0.07);
   Parameters parameters{};
   ContactParameters contact{};
+  // The slip velocity v_s of the MPC's friction law (contact.hpp's (C3)) [m/s]; 0: the plant's.
+  // A model given a state whose foot velocities are off by more than v_s (an estimate, filtered
+  // joint rates) predicts full Coulomb friction in its first sub-step where the plant's feet
+  // stick; a wider v_s keeps that force proportional to the error. model_config applies it.
+  double model_slip_velocity = 0.0;
   // The differenced chain rule stays the closed loop's default for now: the motion checks
   // certify single trajectories, which round-off-level changes flip (README), so a change of
   // linearisation waits for checks over perturbed starts.
@@ -295,8 +300,9 @@ class HumanoidProblem
 // `contact` with the motion's chair, if it has one.
 ContactParameters contact_for(const Motion& motion,
                               ContactParameters contact = ContactParameters{});
-// The MPC's model of `motion`: `config` with the motion's contact surfaces (contact_for) and,
-// if the motion asks for one, its model sub-step (Motion::model_substep).
+// The MPC's model of `motion`: `config` with the motion's contact surfaces (contact_for), if
+// the motion asks for one, its model sub-step (Motion::model_substep), and, if set, the
+// model's slip velocity (ProblemConfig::model_slip_velocity).
 ProblemConfig model_config(const Motion& motion, ProblemConfig config);
 
 // A quiet stance for motion starts: torso upright with its base point at `height`, feet flat
