@@ -19,9 +19,10 @@
 //     comparison (warm-started, untruncated) repeated from five perturbed starts; last,
 //     Coarse-Fast truncated, warm-started, run four times per motion (real-time outcomes vary
 //     with timing): checks passed and samples over 30 ms;
-//   - with --check-starts K [--motion NAME]: each motion's physical check under Coarse-Fast
-//     (untruncated, as in ctest) from rest and from K starts drifting at 1 cm/s, with the
-//     differenced and the analytic linearisation: how many runs passed;
+//   - with --check-starts K [--motion NAME] [--model-slip-velocity V]: each motion's physical
+//     check under Coarse-Fast (untruncated, as in ctest) from rest and from K starts drifting at
+//     1 cm/s, with the differenced and the analytic linearisation: how many runs passed (V: the
+//     MPC model's friction slip velocity, ProblemConfig::model_slip_velocity);
 //   - with --substep-error: the MPC model's one-step prediction error against the 1 ms
 //     simulator, and its linearisation time, for sub-steps of 1 to 15 ms.
 #include <benchmark/benchmark.h>
@@ -370,7 +371,8 @@ void usage(std::FILE* out) {
       out,
       "usage: humanoid_mpc_bench [Google Benchmark flags] [--closed-loop] [--motion NAME]\n"
       "                          [--threads T] [--linearisation analytic|chain-rule|reference]\n"
-      "                          [--check-starts K] [--substep-error]\n");
+      "                          [--check-starts K [--model-slip-velocity V]]\n"
+      "                          [--substep-error]\n");
 }
 
 // The motion checks from nudged starts: Coarse-Fast, warm-started and untruncated (the ctest
@@ -379,12 +381,14 @@ void usage(std::FILE* out) {
 // linearisation. Our choice of nudge: far below what the estimator of a real robot resolves,
 // yet enough to send the chaotic closed loops down different paths, so the pass count says
 // what the controller does rather than what one trajectory did.
-void checks_over_starts(const std::vector<std::string>& motions, int nudges, int threads) {
+void checks_over_starts(const std::vector<std::string>& motions, int nudges, int threads,
+                        double model_slip_velocity) {
   constexpr double kPi = 3.14159265358979323846;
   std::printf(
       "\nMotion checks from rest and %d starts drifting at 1 cm/s (Coarse-Fast, warm, "
-      "untruncated, %d thread%s): passed / runs\n",
-      nudges, threads, threads == 1 ? "" : "s");
+      "untruncated, %d thread%s, model slip velocity %.3f m/s): passed / runs\n",
+      nudges, threads, threads == 1 ? "" : "s",
+      model_slip_velocity > 0.0 ? model_slip_velocity : ContactParameters{}.slip_velocity);
   std::printf("%-18s %12s %12s\n", "motion", "chain-rule", "analytic");
   int total[2] = {0, 0}, runs = 0;
   for (const std::string& file : motions) {
@@ -398,6 +402,7 @@ void checks_over_starts(const std::vector<std::string>& motions, int nudges, int
         config.truncate = false;
         config.threads = threads;
         config.problem.linearisation = l;
+        config.problem.model_slip_velocity = model_slip_velocity;
         if (start > 0)
           config.initial_velocity = 0.01 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
         const RunResult run = run_once(file, motion, config);
@@ -555,6 +560,8 @@ int main(int argc, char** argv) {
   parser.integer("--threads", 1, 64, threads);
   int check_starts = 0;
   parser.integer("--check-starts", 1, 64, check_starts);
+  double model_slip_velocity = 0.0;
+  parser.number("--model-slip-velocity", 0.001, 1.0, "m/s in 0.001..1", model_slip_velocity);
   bool run_substep_error = false;
   parser.flag("--substep-error", run_substep_error);
   std::string error;
@@ -588,7 +595,7 @@ int main(int argc, char** argv) {
         "speed-up %.2fx\n",
         kCoarseHorizon, ms(analytic, 1), ms(analytic, 2), ms(analytic, 1) / ms(analytic, 2));
   }
-  if (check_starts > 0) checks_over_starts(motions, check_starts, threads);
+  if (check_starts > 0) checks_over_starts(motions, check_starts, threads, model_slip_velocity);
   if (run_substep_error) substep_error();
   if (run_closed_loop) {
     if (threads > 1) line_search_lanes();
