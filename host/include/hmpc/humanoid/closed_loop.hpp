@@ -147,9 +147,8 @@ using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 // a reaching motion (Motion::reach), the robot with an arm (A = 1). Throws std::invalid_argument
 // for a negative or non-finite duration, threads outside 1..64, an iteration cap outside 0..1000, a
 // start height outside 0.3..1.5 m, a model slip velocity outside 0..1 m/s, or a motion that
-// needs the other robot; with an estimator,
-// for the robot with an arm (the estimator knows the biped), a moving start, or a rest outside
-// 0.01..10 s.
+// needs the other robot; with an estimator, for the robot with an arm (the estimator knows the
+// biped), a moving start, or a rest outside 0.01..10 s.
 template <int A = 0>
 BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
 
