@@ -45,13 +45,14 @@ void usage(std::FILE* out) {
       "                      with the encoders' angles and the boards' velocities)\n"
       "  --sensor-seed N     the simulated sensors' noise and biases, 0..2^31 (default 1)\n"
       "  --iteration-cap N   iLQR iterations per sample (Coarse-Fast: per layer), 1..1000\n"
-      "                      (default: Table 2.4's 6, reaching Sec. 2.6.2's 4)\n"
+      "                      (default: Table 2.4's %d, reaching Sec. 2.6.2's %d)\n"
       "  --model-slip-velocity V  the slip velocity of the MPC's friction law [m/s],\n"
-      "                      0.001..1 (default: the simulated plant's 0.01)\n"
+      "                      0.001..1 (default: the simulated plant's %g)\n"
       "exit status: 0 motion completed, %d the robot fell (head, hips or a knee on the\n"
       "ground), %d the estimate was lost (the MPC stopped), 2 bad arguments or motion\n"
       "file, 1 the log or pictures could not be written\n",
-      kFellStatus, kLostStatus);
+      kIterationCap, kReachingIterationCap, ContactParameters{}.slip_velocity, kFellStatus,
+      kLostStatus);
 }
 
 // The run on the biped (A = 0) or, for a reaching motion, the robot with an arm (A = 1).
