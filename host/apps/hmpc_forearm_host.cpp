@@ -8,7 +8,9 @@
 // Paced in real time by a 1 kHz timer, or in HIL lock-step by the plant's Sync frames (one
 // host tick per simulated millisecond). A scripted session (--run) asks for idle with faults
 // cleared, then hold, then run with the given strategy and target, then hold again; without
-// it the board stays idle until a DDS command arrives. Fault injection on the host's frames
+// it the board stays idle until a DDS command arrives. The scripted target is any of
+// hmpc/trajectory/joint_target.hpp's shapes or a CSV file, checked against the joint's range
+// and speed before the bus is opened. Fault injection on the host's frames
 // (--drop-percent, --corrupt-percent, --silence-at, --stop-heartbeat-at) exercises the board's
 // defences. At the end: a summary of key=value pairs.
 #include <poll.h>
@@ -32,6 +34,7 @@
 #include "hmpc/cli/arguments.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 #include "hmpc/host/forearm_can_master.hpp"
+#include "hmpc/models/forearm_target_range.hpp"
 #include "hmpc/platform/linux/bus_program.hpp"
 #include "hmpc/platform/linux/frame_faults.hpp"
 
@@ -50,6 +53,9 @@ constexpr const char* kProgram = "hmpc-forearm-host";
 constexpr double kDegree = M_PI / 180;
 // Scripted session: idle with faults cleared, hold from kHoldAt, run from --run-at.
 constexpr double kHoldAt = 0.05;  // s
+// A step's default speed: about the 188 deg/s peak of the thesis's 1 Hz +-30 deg sinusoid, a
+// target every strategy tracks (Sec. 3.4).
+constexpr double kDefaultStepRate = M_PI;  // rad/s
 
 struct Options {
   std::string interface = "vcan0";
@@ -58,7 +64,12 @@ struct Options {
   double duration_s = 0;  // host seconds; 0: until SIGINT/SIGTERM
   bool scripted = false;
   proto::Strategy strategy = proto::Strategy::kTwoStage;
-  double amplitude = 30 * kDegree, frequency_hz = 1.0, offset = 0;
+  hmpc::trajectory::TargetSpec target = [] {
+    hmpc::trajectory::TargetSpec t;
+    t.step_rate = kDefaultStepRate;
+    return t;
+  }();
+  std::vector<hmpc::trajectory::TrajectoryPoint> target_points;  // checked, for every shape
   double run_at_s = 0.3, run_for_s = 10;
   long dds_domain = -1;  // < 0: no DDS
   bool dds_loopback = false;
@@ -72,8 +83,10 @@ void print_usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: hmpc-forearm-host [--interface IFACE] [--node N] [--lockstep] [--duration S]\n"
-      "         [--run STRATEGY [--amplitude-deg A] [--frequency HZ] [--offset-deg D]\n"
-      "          [--run-at S] [--run-for S]] [--dds-domain ID [--dds-loopback]]\n"
+      "         [--run STRATEGY [--target SHAPE] [--amplitude-deg A] [--frequency HZ]\n"
+      "          [--offset-deg D] [--chirp-to HZ] [--step-at S] [--step-rate-deg-s R]\n"
+      "          [--target-file FILE] [--run-at S] [--run-for S]] [--dds-domain ID "
+      "[--dds-loopback]]\n"
       "         [--drop-percent P] [--corrupt-percent P] [--silence-at S] [--silence-ms MS]\n"
       "         [--stop-heartbeat-at S] [--die-at S] [--seed N] [--log FILE]\n"
       "  --interface IFACE     SocketCAN interface (default vcan0)\n"
@@ -84,9 +97,26 @@ void print_usage(std::FILE* out) {
       "  --run STRATEGY        scripted session: idle, hold at %.2f s, run STRATEGY from --run-at\n"
       "                        for --run-for s, then hold; STRATEGY: fine_4ms fine_8ms\n"
       "                        coarse_20ms coarse_40ms two_stage pam_only\n"
-      "  --amplitude-deg A     target sinusoid amplitude, deg (default 30)\n"
-      "  --frequency HZ        target sinusoid frequency (default 1)\n"
-      "  --offset-deg D        target offset, deg (default 0)\n"
+      "  --target SHAPE        the run's target, from its start t = 0 (default sine):\n"
+      "                        sine   offset + amplitude sin(2 pi f t)\n"
+      "                        step   offset until --step-at, then to offset + amplitude at\n"
+      "                               --step-rate-deg-s\n"
+      "                        ramp   straight lines between offset +- amplitude, a triangle\n"
+      "                               wave of frequency f\n"
+      "                        chirp  a sinusoid whose frequency sweeps linearly from f to\n"
+      "                               --chirp-to over --run-for\n"
+      "                        file   the points of --target-file\n"
+      "  --amplitude-deg A     deg, -57..57 (default 30)\n"
+      "  --frequency HZ        f, 0..5 (default 1)\n"
+      "  --offset-deg D        deg, -57..57 (default 0)\n"
+      "  --chirp-to HZ         the chirp's final frequency, 0..5 (default 2)\n"
+      "  --step-at S           s from the run's start (default 1)\n"
+      "  --step-rate-deg-s R   the step's speed, deg/s, 1..573 (default %.0f)\n"
+      "  --target-file FILE    CSV lines time_s,position_rad[,velocity_rad_s] (cubic Hermite\n"
+      "                        between points that give velocities, linear otherwise); implies\n"
+      "                        --target file\n"
+      "                        Every target must stay within the joint's range and speed\n"
+      "                        (the board's software limits, %g rad/s), checked before start.\n"
       "  --run-at S, --run-for S  (default 0.3 and 10)\n"
       "  --dds-domain ID       bridge to Cyclone DDS on this domain: state and telemetry out,\n"
       "                        commands in (hmpc-forearm-cli)\n"
@@ -98,7 +128,7 @@ void print_usage(std::FILE* out) {
       "  --log FILE            CSV of every SolveTelemetry report (4 ms)\n"
       "Exit status: 0 at the end of --duration or on SIGINT/SIGTERM; 1 when the bus, DDS or\n"
       "the log fails; 2 for bad arguments.\n",
-      kHoldAt);
+      kHoldAt, kDefaultStepRate / kDegree, hmpc::forearm::kMaxTargetSpeed);
 }
 
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
@@ -118,9 +148,25 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
     o.scripted = true;
     return {};
   });
-  p.number("--amplitude-deg", 0, 57, "an amplitude in [0, 57] deg", o.amplitude, kDegree);
-  p.number("--frequency", 0, 5, "a frequency in [0, 5] Hz", o.frequency_hz);
-  p.number("--offset-deg", -57, 57, "an offset in [-57, 57] deg", o.offset, kDegree);
+  hmpc::trajectory::TargetSpec& target = o.target;
+  p.text("--target", [&](const std::string& v) -> std::string {
+    if (!hmpc::trajectory::shape_of(v, target.shape))
+      return hmpc::cli::bad_value("--target", "one of sine step ramp chirp file", v);
+    return {};
+  });
+  p.number("--amplitude-deg", -57, 57, "an amplitude in [-57, 57] deg", target.amplitude, kDegree);
+  p.number("--frequency", 0, 5, "a frequency in [0, 5] Hz", target.frequency_hz);
+  p.number("--offset-deg", -57, 57, "an offset in [-57, 57] deg", target.offset, kDegree);
+  p.number("--chirp-to", 0, 5, "a frequency in [0, 5] Hz", target.chirp_end_hz);
+  p.number("--step-at", 0, 1e5, "a time in [0, 1e5] s", target.step_at_s);
+  p.number("--step-rate-deg-s", 1, 573, "a speed in [1, 573] deg/s", target.step_rate, kDegree);
+  bool file_given = false;
+  p.text("--target-file", [&](const std::string& v) -> std::string {
+    if (v.empty()) return "--target-file needs a file name";
+    target.file = v;
+    file_given = true;
+    return {};
+  });
   p.number("--run-at", kHoldAt + 0.05, 1e5, "a time in [0.1, 1e5] s", o.run_at_s);
   p.number("--run-for", 0.001, 1e5, "a duration in [0.001, 1e5] s", o.run_for_s);
   p.integer("--dds-domain", 0, 230, o.dds_domain);
@@ -143,13 +189,28 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
   o.faults.silence_start_s = silence_at;
   o.faults.silence_duration_s = silence_at >= 0 ? silence_ms * 1e-3 : 0;
-  // The board faults past its software limits (firmware BoardConfig): the target stays inside.
-  const auto& limits = hmpc::dds::forearm_joint_limits();
-  if (o.scripted && (o.offset - o.amplitude < limits.min_position ||
-                     o.offset + o.amplitude > limits.max_position)) {
-    error = "the target offset +- amplitude must lie within the board's joint limits [" +
-            std::to_string(limits.min_position) + ", " + std::to_string(limits.max_position) +
-            "] rad";
+  if (file_given && target.shape != hmpc::trajectory::TargetShape::kSine &&
+      target.shape != hmpc::trajectory::TargetShape::kFile) {
+    error = "--target-file goes with --target file";
+    return hmpc::cli::ParseOutcome::kError;
+  }
+  if (file_given) target.shape = hmpc::trajectory::TargetShape::kFile;
+  if (target.shape == hmpc::trajectory::TargetShape::kFile && !file_given) {
+    error = "--target file needs --target-file";
+    return hmpc::cli::ParseOutcome::kError;
+  }
+  // The board faults past its software limits (firmware BoardConfig): the target stays inside,
+  // and within a speed the joint can follow.
+  // A sinusoid streams in closed form for as long as it runs: its first period shows all it asks.
+  const bool sine = target.shape == hmpc::trajectory::TargetShape::kSine;
+  target.duration_s = !sine                     ? o.run_for_s
+                      : target.frequency_hz > 0 ? std::min(o.run_for_s, 1 / target.frequency_hz)
+                                                : hmpc::trajectory::kSampleSpacingS;
+  std::string why;
+  if (o.scripted &&
+      !hmpc::trajectory::make_points(target, hmpc::forearm::target_range(),
+                                     hmpc::dds::kMaxTrajectoryPoints, o.target_points, why)) {
+    error = "invalid target: " + why;
     return hmpc::cli::ParseOutcome::kError;
   }
   if (o.dds_loopback && o.dds_domain < 0) {
@@ -301,7 +362,13 @@ class Host {
       master_.request(proto::RequestedMode::kHold, o_.strategy);
     } else if (t < o_.run_at_s + o_.run_for_s) {
       if (!master_.streaming()) {
-        master_.stream_sinusoid(o_.amplitude, o_.frequency_hz, o_.offset, t);
+        // The sinusoid in closed form (exact at every sample); other shapes as their points.
+        const hmpc::trajectory::TargetSpec& target = o_.target;
+        if (target.shape == hmpc::trajectory::TargetShape::kSine) {
+          master_.stream_sinusoid(target.amplitude, target.frequency_hz, target.offset, t);
+        } else {
+          master_.stream_trajectory(o_.target_points.data(), o_.target_points.size(), t, t);
+        }
         run_start_s_ = t;
       }
       master_.request(proto::RequestedMode::kRun, o_.strategy);
@@ -450,7 +517,7 @@ class Host {
   std::uint64_t frames_sent_ = 0, frames_received_ = 0, board_report_frames_ = 0;
   std::uint64_t interface_down_ = 0;  // sends and receives that found the interface down
   std::uint64_t dds_commands_ = 0, dds_trajectories_ = 0, dds_weights_ = 0;
-  std::vector<hmpc::host::TrajectoryPoint> trajectory_;  // reserved: no allocation per target
+  std::vector<hmpc::trajectory::TrajectoryPoint> trajectory_;  // reserved: no allocation per target
   const hmpc::dds::ForearmDdsHandlers dds_handlers_{
       [this](const hmpc::dds::ModeCommandSample& c) { on_command(c); },
       [this](const hmpc::dds::TrajectoryView& v) { return on_trajectory(v); },

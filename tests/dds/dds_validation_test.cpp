@@ -12,14 +12,15 @@
 #include "forearm_board.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
 #include "hmpc/dds/validation.hpp"
-#include "hmpc/host/joint_trajectory.hpp"
+#include "hmpc/models/forearm_target_range.hpp"
+#include "hmpc/trajectory/joint_trajectory.hpp"
 
 namespace {
 
 namespace dds = hmpc::dds;
 namespace msg = hmpc::dds::msg;
 using dds::Rejection;
-using hmpc::host::TrajectoryPoint;
+using hmpc::trajectory::TrajectoryPoint;
 
 constexpr double kNow = 1.8e9;  // a Unix time in 2027
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -261,8 +262,8 @@ TEST(JointTrajectory, SegmentBoundsAreTheInterpolantsExtremes) {
     const bool hermite = trial % 4 != 0;
     const TrajectoryPoint a{0.2, u(rng), u(rng), hermite};
     const TrajectoryPoint b{0.2 + 0.05 + std::abs(u(rng)), u(rng), u(rng), hermite};
-    const hmpc::host::SegmentBounds bounds = hmpc::host::segment_bounds(a, b);
-    const hmpc::host::SegmentCubic c(a, b);
+    const hmpc::trajectory::SegmentBounds bounds = hmpc::trajectory::segment_bounds(a, b);
+    const hmpc::trajectory::SegmentCubic c(a, b);
     double lo = 1e9, hi = -1e9, speed = 0;
     for (int i = 0; i <= 20000; ++i) {
       const double s = i / 20000.0;
@@ -280,7 +281,7 @@ TEST(JointTrajectory, SegmentBoundsAreTheInterpolantsExtremes) {
 }
 
 TEST(JointTrajectory, HermiteMeetsThePointsWithTheirVelocitiesAndHoldsTheEnds) {
-  hmpc::host::JointTrajectoryTarget target(3);
+  hmpc::trajectory::JointTrajectoryTarget target(3);
   const TrajectoryPoint points[] = {
       {0.5, 0.1, 1.0, true}, {1.5, 0.6, -0.5, true}, {2.0, 0.2, 0.0, false}};
   ASSERT_TRUE(target.assign(points, 3));
@@ -305,7 +306,7 @@ TEST(ForearmJointLimits, AreTheBoardsSoftwareLimits) {
   EXPECT_EQ(limits.min_position, board.theta_min);
   EXPECT_EQ(limits.max_position, board.theta_max);
   EXPECT_STREQ(limits.name, dds::kJointName);
-  EXPECT_EQ(limits.max_speed, dds::kMaxTargetSpeed);
+  EXPECT_EQ(limits.max_speed, hmpc::forearm::kMaxTargetSpeed);
 }
 
 }  // namespace

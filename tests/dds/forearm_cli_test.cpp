@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <future>
 #include <string>
 #include <thread>
@@ -19,7 +20,7 @@ namespace {
 
 namespace dds = hmpc::dds;
 namespace proto = hmpc::forearm_protocol;
-using hmpc::host::TrajectoryPoint;
+using hmpc::trajectory::TrajectoryPoint;
 
 constexpr double kPatience_s = 30;
 constexpr double kPi = 3.14159265358979323846;
@@ -115,6 +116,63 @@ TEST(ForearmCli, RunSendsItsSinusoidRepeatsTheCommandWhileItLastsThenHolds) {
   EXPECT_EQ(got.commands.back().mode, proto::RequestedMode::kHold);
   EXPECT_EQ(got.silences_while_running, 0) << "the run's commander never fell silent";
   EXPECT_EQ(bridge.rejects().total(), 0u) << bridge.rejects().summary();
+}
+
+std::string temp_file(const std::string& name, const std::string& text) {
+  const char* tmp = std::getenv("TMPDIR");
+  const std::string path = std::string(tmp ? tmp : "/tmp") + "/hmpc-forearm-cli-" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+// A target from a CSV file goes out as the file's points, velocities where the file gives them.
+TEST(ForearmCli, RunSendsTheTargetOfACsvFile) {
+  const std::string file =
+      temp_file("target.csv", "time_s,position_rad,velocity_rad_s\n0,0,0\n0.5,0.2\n1.5,0.3,0\n");
+  dds::ForearmDdsBridge bridge(107, 1, dds::loopback_config());
+  auto cli = std::async(std::launch::async, [&] {
+    return run_cli("--domain 107 --node 1 run --target-file " + file + " --duration 0.3");
+  });
+  const Received got = poll_until_done(bridge, cli);
+  const Outcome outcome = cli.get();
+  EXPECT_EQ(outcome.status, 0) << outcome.output;
+  ASSERT_EQ(got.trajectories.size(), 1u);
+  const std::vector<TrajectoryPoint>& points = got.trajectories[0];
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_EQ(points[1].time_s, 0.5);
+  EXPECT_EQ(points[1].position, 0.2);
+  EXPECT_FALSE(points[1].has_velocity);
+  EXPECT_EQ(points[2].position, 0.3);
+  EXPECT_TRUE(points[2].has_velocity);
+  EXPECT_EQ(bridge.rejects().total(), 0u) << bridge.rejects().summary();
+}
+
+// A file that is not a target the joint can follow exits 2 naming the problem, before any DDS.
+TEST(ForearmCli, BadTargetFilesExit2NamingTheProblem) {
+  struct Case {
+    std::string arguments;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"run --target-file " + temp_file("bad.csv", "0,0\n1;0.2\n"),
+       "bad.csv:2: expected time_s,position_rad"},
+      {"run --target-file " + temp_file("nan.csv", "0,0\n1,nan\n"), "is not finite"},
+      {"run --target-file " + temp_file("fast.csv", "0,0\n0.05,0.6\n"),
+       "invalid target: between points[0] and [1], elbow moves at up to 12 rad/s"},
+      {"run --target-file " + temp_file("far.csv", "0,0\n5,1.7\n"),
+       "invalid target: points[1].positions[0] (elbow) = 1.7 is outside"},
+      {"run --target-file /nonexistent/target.csv", "/nonexistent/target.csv: cannot open"},
+      {"run --target-file x.csv --sine 10 1 --duration 1",
+       "--target-file takes neither --sine nor --offset"},
+      {"hold --target-file x.csv", "--sine, --offset and --target-file are targets of run"},
+  };
+  for (const Case& c : cases) {
+    const Outcome outcome = run_cli(c.arguments);
+    EXPECT_EQ(outcome.status, 2) << c.arguments << "\n" << outcome.output;
+    EXPECT_NE(outcome.output.find(c.message), std::string::npos)
+        << c.arguments << ": no '" << c.message << "' in\n"
+        << outcome.output;
+  }
 }
 
 TEST(ForearmCli, AnInterruptedRunEndsInHold) {
@@ -245,7 +303,7 @@ TEST(ForearmCli, BadArgumentsAndTargetsExit2NamingTheProblem) {
       {"run --sine 20x 1 --duration 1", "--sine amplitude needs a finite number, got '20x'"},
       {"run --sine nan 1 --duration 1", "--sine amplitude needs a finite number, got 'nan'"},
       {"run --sine 20 1", "--sine needs a --duration"},
-      {"hold --offset 10", "--sine and --offset are targets of run"},
+      {"hold --offset 10", "--sine, --offset and --target-file are targets of run"},
       {"--node 16 run", "--node must be an integer in 0..15"},
       {"--domain 233 run", "--domain must be an integer in 0..232"},
       {"--timeout 0 run", "--timeout must be a number of seconds"},
@@ -253,7 +311,7 @@ TEST(ForearmCli, BadArgumentsAndTargetsExit2NamingTheProblem) {
       {"run --sine 20 9 --duration 1",
        "invalid target: points[0].velocities[0] (elbow) = 19.7392 rad/s is beyond the joint's 10"},
       {"run --offset 100", "invalid target: points[0].positions[0] (elbow) = 1.74533 is outside"},
-      {"run --sine 1 0.1 --duration 200", "the host holds at most 8192"},
+      {"run --sine 1 0.1 --duration 200", "points, at most 8192"},
       {"run --duration -1", "--duration must not be negative"},
       {"watch --samples 0", "--samples must be an integer in 1..1000000"},
       {"idle extra", "unexpected argument 'extra'"},

@@ -21,7 +21,7 @@ namespace {
 namespace dds = hmpc::dds;
 namespace msg = hmpc::dds::msg;
 namespace proto = hmpc::forearm_protocol;
-using hmpc::host::TrajectoryPoint;
+using hmpc::trajectory::TrajectoryPoint;
 
 // Discovery on loopback takes well under a second here; a loaded machine or an emulated
 // guest gets a wide margin.

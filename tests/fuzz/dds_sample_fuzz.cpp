@@ -22,7 +22,7 @@
 
 #include "hmpc/dds/forearm_dds.hpp"
 #include "hmpc/dds/validation.hpp"
-#include "hmpc/host/joint_trajectory.hpp"
+#include "hmpc/trajectory/joint_trajectory.hpp"
 
 namespace {
 
@@ -92,7 +92,7 @@ void check_trajectory(Reader& in) {
     fail("accepted a trajectory not of the joint");
   }
   if (count == 0) fail("accepted no points");
-  std::vector<hmpc::host::TrajectoryPoint> accepted;
+  std::vector<hmpc::trajectory::TrajectoryPoint> accepted;
   for (std::size_t k = 0; k < count; ++k) {
     const msg::JointTrajectoryPoint& p = points[k];
     if (p.time_from_start.nanosec >= 1000000000u) fail("accepted a nanosec of a second or more");
@@ -113,7 +113,7 @@ void check_trajectory(Reader& in) {
     }
     accepted.push_back({time, q, qd, has_velocity});
   }
-  hmpc::host::JointTrajectoryTarget target(kMaxPoints);
+  hmpc::trajectory::JointTrajectoryTarget target(kMaxPoints);
   if (!target.assign(accepted.data(), accepted.size())) fail("an accepted trajectory did not fit");
   constexpr int kSamples = 64;
   const double tolerance = 1e-9 * (1 + joint.max_position - joint.min_position);

@@ -22,7 +22,7 @@ inline std::string work_dir() {
 inline HilRunSpec spec(forearm_protocol::Strategy strategy, const std::string& name) {
   HilRunSpec s;
   s.strategy = strategy;
-  s.frequency_hz = 1.0;
+  s.target.frequency_hz = 1.0;
   s.noise_scale = 1;
   s.seed = 1;
   s.mismatch = {1.05, 1.2, 1.1};  // as the demo's default (hmpc-forearm-hil)

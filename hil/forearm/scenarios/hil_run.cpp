@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "hmpc/models/forearm_problems.hpp"
+#include "hmpc/models/forearm_target_range.hpp"
 #include "hmpc/platform/linux/child_process.hpp"
 
 namespace hmpc::hil {
@@ -92,6 +93,23 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
   }
   const std::string dir = spec.directory + "/";
   const double duration = spec.run_at_s + spec.run_for_s + spec.settle_s;
+  // theta_d(t) on the run's clock: the sinusoid in closed form, as the host streams it; any
+  // other shape from its points.
+  trajectory::TargetSpec target = spec.target;
+  target.duration_s = spec.run_for_s;
+  std::vector<trajectory::TrajectoryPoint> points;
+  std::string why;
+  if (!trajectory::make_points(target, forearm::target_range(), trajectory::kMaxPoints, points,
+                               why)) {
+    result.error = "invalid target: " + why;
+    return result;
+  }
+  trajectory::JointTrajectoryTarget target_points(points.size());
+  target_points.assign(points.data(), points.size());
+  const auto theta_d_at = [&](double t) {
+    if (target.shape != trajectory::TargetShape::kSine) return target_points.position(t);
+    return target.offset + target.amplitude * std::sin(2 * M_PI * target.frequency_hz * t);
+  };
 
   const std::string node = std::to_string(spec.node);
   std::vector<std::string> board_args{"--lockstep", "--emulate-target", "cortex-m7", "--node", node,
@@ -106,16 +124,30 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
                                      node,
                                      "--run",
                                      strategy_name(spec.strategy),
+                                     "--target",
+                                     trajectory::shape_name(target.shape),
                                      "--frequency",
-                                     number_text(spec.frequency_hz),
+                                     number_text(target.frequency_hz),
                                      "--amplitude-deg",
-                                     number_text(spec.amplitude_rad * 180 / M_PI),
+                                     number_text(target.amplitude * 180 / M_PI),
+                                     "--offset-deg",
+                                     number_text(target.offset * 180 / M_PI),
+                                     "--chirp-to",
+                                     number_text(target.chirp_end_hz),
+                                     "--step-at",
+                                     number_text(target.step_at_s),
+                                     "--step-rate-deg-s",
+                                     number_text(target.step_rate * 180 / M_PI),
                                      "--run-at",
                                      number_text(spec.run_at_s),
                                      "--run-for",
                                      number_text(spec.run_for_s),
                                      "--log",
                                      dir + "host.csv"};
+  if (target.shape == trajectory::TargetShape::kFile) {
+    host_args.push_back("--target-file");
+    host_args.push_back(target.file);
+  }
   host_args.insert(host_args.end(), spec.host_args.begin(), spec.host_args.end());
   std::vector<std::string> plant_args{"--lockstep",
                                       "--node",
@@ -192,7 +224,7 @@ HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {
     const PlantRow& x = rows[std::size_t(ms - 1)];
     const PlantRow& u = rows[std::size_t(ms)];  // applied from ms to ms + 1
     const double t = 1e-3 * double(ms);
-    const double theta_d = spec.amplitude_rad * std::sin(2 * M_PI * spec.frequency_hz * (t - t0));
+    const double theta_d = theta_d_at(t - t0);
     result.accumulated_cost +=
         forearm::tracking_cost(model, weights, x.theta, theta_d, x.pressure_bar, u.v_m, true)
             .value +

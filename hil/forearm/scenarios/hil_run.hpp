@@ -5,7 +5,9 @@
 //   hmpc-forearm-plant  --lockstep --wait-host ...               (Simbody forearm)
 // and the figures of the run from their logs and summaries: accumulated cost (Eq. 3.3a per
 // 4 ms control period, as forearm::simulate_tracking counts it), RMS tracking error, solve
-// times charged by the emulated Cortex-M7, deadline misses and the torque shares.
+// times charged by the emulated Cortex-M7, deadline misses and the torque shares. The target is
+// checked before any program starts, and the run scored against the same points the host
+// streams.
 #pragma once
 
 #include <cstdint>
@@ -15,6 +17,7 @@
 
 #include "hmpc/models/forearm.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/trajectory/joint_target.hpp"
 #include "simbody_forearm.hpp"
 
 namespace hmpc::hil {
@@ -28,9 +31,10 @@ struct HilPrograms {
 struct HilRunSpec {
   forearm_protocol::Strategy strategy = forearm_protocol::Strategy::kTwoStage;
   forearm_protocol::NodeId node = 0;  // board node id: runs at once on one bus use different ones
-  double frequency_hz = 1.0;
-  double amplitude_rad = 30 * 3.14159265358979323846 / 180;  // thesis Sec. 3.3: +-30 deg
-  double run_for_s = 10;                                     // thesis Sec. 3.4: 10-s trials
+  // The target from the run's start (its duration is run_for_s); by default the thesis's
+  // Sec. 3.3 target, +-30 deg at 1 Hz.
+  trajectory::TargetSpec target{};
+  double run_for_s = 10;   // thesis Sec. 3.4: 10-s trials
   double run_at_s = 0.3;   // idle, then hold, then run from here (host's script)
   double settle_s = 0.1;   // plant keeps stepping after the run (board back in hold)
   double noise_scale = 0;  // plant sensor noise (plant_node/options.hpp SensorNoise)

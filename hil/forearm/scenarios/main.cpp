@@ -25,6 +25,7 @@
 
 #include "hil_run.hpp"
 #include "hmpc/cli/arguments.hpp"
+#include "hmpc/models/forearm_target_range.hpp"
 
 namespace {
 
@@ -48,7 +49,8 @@ struct Options {
   long trials = 5;
   double duration_s = 10;
   double noise = 1;
-  bool mismatch = true;
+  hmpc::trajectory::TargetSpec target{};  // frequency_hz: each of `frequencies` in turn
+  hmpc::hil::ForearmMismatch mismatch = kDefaultMismatch;
   bool weight_sweep = false;
   long jobs = 1;
 };
@@ -57,19 +59,30 @@ void print_usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: hmpc-forearm-hil --out DIR [--strategies LIST] [--frequencies LIST] [--trials N]\n"
-      "         [--duration S] [--noise SCALE] [--no-mismatch] [--weight-sweep] [--jobs N]\n"
+      "         [--duration S] [--noise SCALE] [--no-mismatch] [--mass-scale X]\n"
+      "         [--friction-scale X] [--pam-time-scale X] [--weight-sweep] [--jobs N]\n"
+      "         [--target SHAPE] [--amplitude-deg A] [--offset-deg D] [--chirp-to HZ]\n"
+      "         [--step-at S] [--step-rate-deg-s R] [--target-file FILE]\n"
       "Runs board, host and Simbody plant in lock-step over vcan0 for each strategy, target\n"
-      "frequency (+-30 deg sinusoids) and trial (a different noise seed each), and writes CSV,\n"
-      "a markdown table and PNG plots to DIR. Run it with vcan0 up, e.g. through\n"
+      "frequency (+-30 deg sinusoids by default) and trial (a different noise seed each), and\n"
+      "writes CSV, a markdown table and PNG plots to DIR. Run it with vcan0 up, e.g. through\n"
       "hil/vcan/run-with-vcan.sh.\n"
       "  --strategies LIST   comma-separated: fine_4ms,fine_8ms,coarse_20ms,coarse_40ms,\n"
       "                      two_stage,pam_only (default: all)\n"
-      "  --frequencies LIST  comma-separated Hz, each in (0, 2] (default 0.25,0.5,1)\n"
+      "  --frequencies LIST  comma-separated Hz, each in (0, 2.5] (default 0.25,0.5,1); the\n"
+      "                      sine's and the ramp's frequency, the chirp's start; none for a\n"
+      "                      step or a file (their runs are listed at 0 Hz)\n"
       "  --trials N          1..20 (default 5)\n"
       "  --duration S        seconds of tracking per run, 1..60 (default 10)\n"
       "  --noise SCALE       sensor noise, times typical levels, 0..10 (default 1)\n"
       "  --no-mismatch       plant = controller's model (default: mass x1.05, friction x1.2,\n"
       "                      valve time constant x1.1)\n"
+      "  --mass-scale X, --friction-scale X, --pam-time-scale X\n"
+      "                      the plant's mismatch, each a factor in [0.5, 2] (after\n"
+      "                      --no-mismatch: from 1)\n"
+      "  --target SHAPE ...  the target of every run, as hmpc-forearm-host takes it (sine,\n"
+      "                      step, ramp, chirp, file; see hmpc-forearm-host --help); checked\n"
+      "                      against the joint's range and speed before any run\n"
       "  --weight-sweep      also run Two-stage, Coarse 20 ms and Fine 4 ms at 1 Hz for\n"
       "                      w_v = 0.02, 0.002, 0.0002 (Fig. 3.4)\n"
       "  --jobs N            runs at once, 1..4, each on its own board node id (default 1)\n");
@@ -96,6 +109,7 @@ bool strategy_from_name(const std::string& text, proto::Strategy& out) {
 
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
   hmpc::cli::OptionParser p;
+  bool frequencies_given = false;
   p.text("--out", [&](const std::string& v) -> std::string {
     if (v.empty()) return "--out needs a directory";
     o.out = v;
@@ -111,11 +125,12 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
     return o.strategies.empty() ? "--strategies needs at least one strategy" : "";
   });
   p.text("--frequencies", [&](const std::string& v) -> std::string {
+    frequencies_given = true;
     o.frequencies.clear();
     for (const std::string& item : split(v)) {
       double f = 0;
-      if (!hmpc::cli::parse_number(item, 1e-3, 2, f))
-        return hmpc::cli::bad_value("--frequencies", "a list of frequencies in (0, 2] Hz", v);
+      if (!hmpc::cli::parse_number(item, 1e-3, 2.5, f))
+        return hmpc::cli::bad_value("--frequencies", "a list of frequencies in (0, 2.5] Hz", v);
       o.frequencies.push_back(f);
     }
     return o.frequencies.empty() ? "--frequencies needs at least one frequency" : "";
@@ -125,15 +140,106 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.number("--noise", 0, 10, "a scale in [0, 10]", o.noise);
   bool no_mismatch = false;
   p.flag("--no-mismatch", no_mismatch);
+  double scales[3] = {NAN, NAN, NAN};
+  p.number("--mass-scale", 0.5, 2, "a factor in [0.5, 2]", scales[0]);
+  p.number("--friction-scale", 0.5, 2, "a factor in [0.5, 2]", scales[1]);
+  p.number("--pam-time-scale", 0.5, 2, "a factor in [0.5, 2]", scales[2]);
+  hmpc::trajectory::TargetSpec& target = o.target;
+  p.text("--target", [&](const std::string& v) -> std::string {
+    if (!hmpc::trajectory::shape_of(v, target.shape))
+      return hmpc::cli::bad_value("--target", "one of sine step ramp chirp file", v);
+    return {};
+  });
+  p.number("--amplitude-deg", -57, 57, "an amplitude in [-57, 57] deg", target.amplitude,
+           M_PI / 180);
+  p.number("--offset-deg", -57, 57, "an offset in [-57, 57] deg", target.offset, M_PI / 180);
+  p.number("--chirp-to", 0, 5, "a frequency in [0, 5] Hz", target.chirp_end_hz);
+  p.number("--step-at", 0, 60, "a time in [0, 60] s", target.step_at_s);
+  target.step_rate = M_PI;  // hmpc-forearm-host's default
+  p.number("--step-rate-deg-s", 1, 573, "a speed in [1, 573] deg/s", target.step_rate, M_PI / 180);
+  p.text("--target-file", [&](const std::string& v) -> std::string {
+    if (v.empty()) return "--target-file needs a file name";
+    target.file = v;
+    target.shape = hmpc::trajectory::TargetShape::kFile;
+    return {};
+  });
   p.flag("--weight-sweep", o.weight_sweep);
   p.integer("--jobs", 1, 4, o.jobs);
   const auto outcome = p.parse(argc, argv, error);
-  o.mismatch = !no_mismatch;
-  if (outcome == hmpc::cli::ParseOutcome::kRun && o.out.empty()) {
+  if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
+  if (no_mismatch) o.mismatch = {1, 1, 1};
+  if (!std::isnan(scales[0])) o.mismatch.mass_scale = scales[0];
+  if (!std::isnan(scales[1])) o.mismatch.friction_scale = scales[1];
+  if (!std::isnan(scales[2])) o.mismatch.pam_time_constant_scale = scales[2];
+  if (o.out.empty()) {
     error = "--out is required";
     return hmpc::cli::ParseOutcome::kError;
   }
+  const bool periodic = target.shape == hmpc::trajectory::TargetShape::kSine ||
+                        target.shape == hmpc::trajectory::TargetShape::kRamp ||
+                        target.shape == hmpc::trajectory::TargetShape::kChirp;
+  if (!periodic) {
+    if (frequencies_given) {
+      error = std::string("--frequencies goes with sine, ramp and chirp targets, not ") +
+              hmpc::trajectory::shape_name(target.shape);
+      return hmpc::cli::ParseOutcome::kError;
+    }
+    o.frequencies = {0};
+  }
+  if (target.shape == hmpc::trajectory::TargetShape::kFile && target.file.empty()) {
+    error = "--target file needs --target-file";
+    return hmpc::cli::ParseOutcome::kError;
+  }
+  // Every run's target, checked before the first run starts.
+  for (double f : o.frequencies) {
+    hmpc::trajectory::TargetSpec t = target;
+    t.frequency_hz = f;
+    t.duration_s = o.duration_s;
+    std::vector<hmpc::trajectory::TrajectoryPoint> points;
+    std::string why;
+    if (!hmpc::trajectory::make_points(t, hmpc::forearm::target_range(),
+                                       hmpc::trajectory::kMaxPoints, points, why)) {
+      error = "invalid target: " + why;
+      return hmpc::cli::ParseOutcome::kError;
+    }
+  }
   return outcome;
+}
+
+// The runs' target and the plant's mismatch, as the summary states them.
+std::string target_text(const hmpc::trajectory::TargetSpec& t) {
+  using hmpc::trajectory::TargetShape;
+  char text[256];
+  const double deg = 180 / M_PI;
+  switch (t.shape) {
+    case TargetShape::kSine:
+      std::snprintf(text, sizeof text, "+-%g deg sinusoids about %g deg", t.amplitude * deg,
+                    t.offset * deg);
+      break;
+    case TargetShape::kStep:
+      std::snprintf(text, sizeof text, "a step of %g deg from %g deg at %g s, at %g deg/s",
+                    t.amplitude * deg, t.offset * deg, t.step_at_s, t.step_rate * deg);
+      break;
+    case TargetShape::kRamp:
+      std::snprintf(text, sizeof text, "+-%g deg ramps (triangle waves) about %g deg",
+                    t.amplitude * deg, t.offset * deg);
+      break;
+    case TargetShape::kChirp:
+      std::snprintf(text, sizeof text, "+-%g deg chirps about %g deg, up to %g Hz",
+                    t.amplitude * deg, t.offset * deg, t.chirp_end_hz);
+      break;
+    case TargetShape::kFile: return "the target of " + t.file;
+  }
+  return text;
+}
+
+std::string mismatch_text(const hmpc::hil::ForearmMismatch& m) {
+  if (m.mass_scale == 1 && m.friction_scale == 1 && m.pam_time_constant_scale == 1)
+    return "no mismatch";
+  char text[128];
+  std::snprintf(text, sizeof text, "mass x%g, friction x%g, valve time constant x%g", m.mass_scale,
+                m.friction_scale, m.pam_time_constant_scale);
+  return text;
 }
 
 struct Row {
@@ -210,12 +316,12 @@ void write_tables(const std::string& out, const std::vector<Row>& rows, const Op
   }
 
   std::ostringstream md;
-  md << "# Forearm HIL over CAN: " << o.trials << " trial(s) of " << o.duration_s
-     << " s per cell, +-30 deg sinusoids\n\n"
+  md << "# Forearm HIL over CAN: " << o.trials << " trial(s) of " << o.duration_s << " s per cell, "
+     << target_text(o.target) << "\n\n"
      << "Board: hmpc-forearm-board, lock-step, compute time of the STM32H743 (Cortex-M7, 400 MHz)"
         " charged per solve. Plant: Simbody, "
-     << (o.mismatch ? "mass x1.05, friction x1.2, valve time constant x1.1" : "no mismatch")
-     << ", sensor noise x" << o.noise << ". Mean +- standard deviation over trials.\n\n"
+     << mismatch_text(o.mismatch) << ", sensor noise x" << o.noise
+     << ". Mean +- standard deviation over trials.\n\n"
      << "| f (Hz) | w_v | strategy | accumulated cost (Eq. 3.3) | RMS error (deg) | max solve (ms)"
         " | median solve (ms) | deadline misses | motor share of torque |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
@@ -267,6 +373,13 @@ void write_bar_data(const std::string& path, const std::vector<Row>& rows, doubl
 }
 
 bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o) {
+  // A run's target in a title: "1 Hz sine", or the shape alone where no frequency applies.
+  const auto target_label = [&](double f) {
+    std::ostringstream label;
+    if (f > 0) label << f << " Hz ";
+    label << hmpc::trajectory::shape_name(o.target.shape);
+    return label.str();
+  };
   write_bar_data(out + "/hil_cost.dat", rows, 0,
                  [](const HilRunResult& r) { return r.accumulated_cost; });
   write_bar_data(out + "/hil_error.dat", rows, 0,
@@ -281,12 +394,12 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
                         bool limit_line) {
     gp << "set output '" << out << "/" << png << "'\nset title '" << title << "'\nset ylabel '"
        << ylabel
-       << "'\nset xlabel 'target frequency (Hz)'\nset boxwidth 0.12\n"
+       << "'\nset xlabel 'target'\nset boxwidth 0.12\n"
           "set style fill solid 0.6\nset yrange [0:*]\nset xrange [-0.5:"
        << o.frequencies.size() - 0.5 << "]\n"
        << "set xtics (";
     for (std::size_t i = 0; i < o.frequencies.size(); ++i)
-      gp << (i ? ", " : "") << "'" << o.frequencies[i] << "' " << i;
+      gp << (i ? ", " : "") << "'" << target_label(o.frequencies[i]) << "' " << i;
     gp << ")\nplot ";
     for (std::size_t s = 0; s < o.strategies.size(); ++s) {
       const std::string n = name(o.strategies[s]);
@@ -316,8 +429,8 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
     std::ostringstream png;
     png << out << "/hil_angle_" << f << "hz.png";
     gp << "set output '" << png.str() << "'\nset datafile separator ','\nset title 'Joint angle, "
-       << f
-       << " Hz target, trial 1 (cf. Fig. 3.5)'\nset xlabel 'time (s)'\nset ylabel "
+       << target_label(f)
+       << " target, trial 1 (cf. Fig. 3.5)'\nset xlabel 'time (s)'\nset ylabel "
           "'angle (deg)'\nplot ";
     bool first = true;
     for (const char* s : {"fine_4ms", "coarse_20ms", "two_stage"}) {
@@ -341,8 +454,8 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
     gp << "set output '" << out
        << "/hil_torques.png'\nset datafile separator ','\n"
           "set title 'Two-stage, "
-       << f_max
-       << " Hz: PAM and motor torque (cf. Fig. 3.9)'\n"
+       << target_label(f_max)
+       << ": PAM and motor torque (cf. Fig. 3.9)'\n"
           "set xlabel 'time (s)'\nset ylabel 'torque (N m)'\nplot '"
        << two_stage
        << "/plant.csv' every ::1 using 1:7 with lines title 'PAM', '' every ::1 using 1:8 with "
@@ -407,12 +520,13 @@ int main(int argc, char** argv) {
       HilRunSpec spec;
       strategy_from_name(row.strategy, spec.strategy);
       spec.node = node;
-      spec.frequency_hz = row.frequency;
+      spec.target = o.target;
+      if (row.frequency > 0) spec.target.frequency_hz = row.frequency;
       spec.run_for_s = o.duration_s;
       spec.noise_scale = o.noise;
       spec.seed = std::uint64_t(row.trial);
       spec.w_v = row.w_v;
-      if (o.mismatch) spec.mismatch = kDefaultMismatch;
+      spec.mismatch = o.mismatch;
       spec.directory = run_dir(o.out, row.strategy, row.frequency, row.w_v, row.trial);
       row.r = hmpc::hil::run_hil(spec, programs);
       const std::lock_guard<std::mutex> lock(print);

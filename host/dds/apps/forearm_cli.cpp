@@ -18,6 +18,7 @@
 
 #include "hmpc/dds/cost_weights.hpp"
 #include "hmpc/dds/forearm_dds.hpp"
+#include "hmpc/trajectory/joint_target.hpp"
 
 namespace {
 
@@ -25,11 +26,8 @@ namespace dds = hmpc::dds;
 namespace proto = hmpc::forearm_protocol;
 
 constexpr double kPi = 3.14159265358979323846;
-// A sinusoid goes out as points this far apart, with their velocities: the cubic Hermite
-// between them is within A (2 pi f h)^4 / 384 of the sinusoid, 2e-5 rad at 30 deg and 2.5 Hz.
-constexpr double kSineSpacingS = 0.020;
 // A constant target is reached over this time from wherever the joint is: across the whole
-// joint range (2.8 rad) at 2.8 rad/s, within kMaxTargetSpeed.
+// joint range (2.8 rad) at 2.8 rad/s, within forearm::kMaxTargetSpeed.
 constexpr double kRampS = 1.0;
 // The run command is repeated five times per deadline, so one lost or late sample never trips it.
 constexpr double kRepeatS = dds::kCommandDeadlineS / 5;
@@ -62,6 +60,8 @@ void usage(std::FILE* out) {
       "                    pam_only\n"
       "  --sine AMP_DEG FREQ_HZ  sinusoidal target of this amplitude and frequency (run, needs\n"
       "                    --duration)\n"
+      "  --target-file FILE  a target from a CSV file: lines time_s,position_rad[,velocity_rad_s]\n"
+      "                    from the run's start (run)\n"
       "  --offset DEG      target offset (alone: a constant target reached in 1 s); default:\n"
       "                    hold the present angle\n"
       "  --duration S      how long the run lasts, 0 = until interrupted (default 0)\n"
@@ -81,6 +81,7 @@ struct Options {
   bool sine = false;
   double amplitude_deg = 0;
   double frequency_hz = 0;
+  std::string target_file;
   bool offset_given = false;
   double offset_deg = 0;
   double duration_s = 0;
@@ -173,6 +174,9 @@ Options parse(int argc, char** argv) {
       o.sine = true;
       o.amplitude_deg = number("--sine amplitude", args.value_of("--sine amplitude"));
       o.frequency_hz = number("--sine frequency", args.value_of("--sine frequency"));
+    } else if (arg == "--target-file") {
+      o.target_file = args.value_of(arg);
+      if (o.target_file.empty()) throw ArgumentError{"--target-file needs a file name"};
     } else if (arg == "--offset") {
       o.offset_given = true;
       o.offset_deg = number(arg, args.value_of(arg));
@@ -209,8 +213,11 @@ Options parse(int argc, char** argv) {
   if (o.command == "weights" && o.weights.empty()) {
     throw ArgumentError{"weights needs at least one NAME=VALUE"};
   }
-  if ((o.sine || o.offset_given) && o.command != "run") {
-    throw ArgumentError{"--sine and --offset are targets of run"};
+  if ((o.sine || o.offset_given || !o.target_file.empty()) && o.command != "run") {
+    throw ArgumentError{"--sine, --offset and --target-file are targets of run"};
+  }
+  if (!o.target_file.empty() && (o.sine || o.offset_given)) {
+    throw ArgumentError{"--target-file takes neither --sine nor --offset"};
   }
   if (o.sine && !(o.duration_s > 0)) throw ArgumentError{"--sine needs a --duration"};
   return o;
@@ -230,33 +237,31 @@ dds::ModeCommandSample command_of(const Options& o) {
   return c;
 }
 
-// The target as points: a sinusoid sampled every kSineSpacingS with its velocities, or one
-// point reached after kRampS; none to hold the present angle.
-std::vector<hmpc::host::TrajectoryPoint> target_of(const Options& o) {
-  std::vector<hmpc::host::TrajectoryPoint> points;
-  const double offset = o.offset_deg * kPi / 180;
-  if (o.sine) {
-    const double amplitude = o.amplitude_deg * kPi / 180;
-    const double w = 2 * kPi * o.frequency_hz;
-    const auto count = static_cast<std::size_t>(std::ceil(o.duration_s / kSineSpacingS)) + 1;
-    if (count > dds::kMaxTrajectoryPoints) {
-      throw ArgumentError{"--duration " + std::to_string(o.duration_s) + " s of sinusoid is " +
-                          std::to_string(count) + " points, the host holds at most " +
-                          std::to_string(dds::kMaxTrajectoryPoints)};
-    }
-    for (std::size_t k = 0; k < count; ++k) {
-      const double t = double(k) * kSineSpacingS;
-      points.push_back(
-          {t, offset + amplitude * std::sin(w * t), amplitude * w * std::cos(w * t), true});
+// The target as points: a sinusoid sampled with its velocities (joint_target.hpp), the points
+// of a CSV file, or one point reached after kRampS; none to hold the present angle.
+std::vector<hmpc::trajectory::TrajectoryPoint> target_of(const Options& o) {
+  std::vector<hmpc::trajectory::TrajectoryPoint> points;
+  hmpc::trajectory::TargetSpec spec;
+  spec.offset = o.offset_deg * kPi / 180;
+  if (o.sine || !o.target_file.empty()) {
+    spec.shape =
+        o.sine ? hmpc::trajectory::TargetShape::kSine : hmpc::trajectory::TargetShape::kFile;
+    spec.amplitude = o.amplitude_deg * kPi / 180;
+    spec.frequency_hz = o.frequency_hz;
+    spec.duration_s = o.sine ? o.duration_s : 1;
+    spec.file = o.target_file;
+    std::string error;
+    if (!hmpc::trajectory::shape_points(spec, dds::kMaxTrajectoryPoints, points, error)) {
+      throw ArgumentError{"invalid target: " + error};
     }
   } else if (o.offset_given) {
-    points.push_back({kRampS, offset, 0, true});
+    points.push_back({kRampS, spec.offset, 0, true});
   }
   return points;
 }
 
 // The bridge's own checks of the target, before it is sent: exit 2 with the reason.
-void check_target(const std::vector<hmpc::host::TrajectoryPoint>& points) {
+void check_target(const std::vector<hmpc::trajectory::TrajectoryPoint>& points) {
   if (points.empty()) return;
   const dds::TrajectorySample sample(points);
   const dds::Verdict v = dds::validate(sample.message(), &dds::forearm_joint_limits(), 1,
@@ -274,7 +279,7 @@ bool deliver(dds::ForearmDdsClient& client, const Options& o) {
 }
 
 int send(const Options& o, const dds::ModeCommandSample& command,
-         const std::vector<hmpc::host::TrajectoryPoint>& target, const std::string& config) {
+         const std::vector<hmpc::trajectory::TrajectoryPoint>& target, const std::string& config) {
   dds::ForearmDdsClient client(o.domain, static_cast<proto::NodeId>(o.node), config);
   if (!client.wait_for_bridge(o.timeout_s)) {
     std::fprintf(stderr,
@@ -394,7 +399,7 @@ int watch(const Options& o, const std::string& config) {
 int main(int argc, char** argv) {
   Options options;
   dds::ModeCommandSample command;
-  std::vector<hmpc::host::TrajectoryPoint> target;
+  std::vector<hmpc::trajectory::TrajectoryPoint> target;
   try {
     options = parse(argc, argv);
     if (options.command == "weights") {

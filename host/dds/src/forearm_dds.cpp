@@ -11,7 +11,7 @@
 
 #include "hmpc/dds/cost_weights.hpp"
 #include "hmpc/dds/endpoint.hpp"
-#include "hmpc/models/forearm.hpp"
+#include "hmpc/models/forearm_target_range.hpp"
 
 namespace hmpc::dds {
 
@@ -107,8 +107,8 @@ const std::array<NamedRange, 4>& forearm_weight_limits() {
 
 const JointLimits& forearm_joint_limits() {
   static const JointLimits limits = [] {
-    const forearm::Parameters<double> arm{};
-    return JointLimits{kJointName, arm.soft_limit_lower, arm.soft_limit_upper, kMaxTargetSpeed};
+    const trajectory::JointRange range = forearm::target_range();
+    return JointLimits{kJointName, range.min_position, range.max_position, range.max_speed};
   }();
   return limits;
 }
@@ -177,7 +177,7 @@ struct ForearmDdsBridge::Impl {
   Reader<msg::JointTrajectory> trajectories;
   Reader<msg::CostWeights> weights;
   std::string hardware_id, diagnostic_name;
-  std::vector<host::TrajectoryPoint> points;
+  std::vector<trajectory::TrajectoryPoint> points;
   RejectCounters rejects;
   DiagnosticsState last_diagnostics{};
   double next_diagnostics_s = 0;
@@ -307,7 +307,7 @@ const RejectCounters& ForearmDdsBridge::rejects() const { return impl_->rejects;
 std::uint64_t ForearmDdsBridge::commander_silences() const { return impl_->silences; }
 const std::string& ForearmDdsBridge::ros_namespace() const { return impl_->ros_namespace; }
 
-TrajectorySample::TrajectorySample(std::vector<host::TrajectoryPoint> points)
+TrajectorySample::TrajectorySample(std::vector<trajectory::TrajectoryPoint> points)
     : points_(std::move(points)), out_(points_.size()) {
   for (std::size_t k = 0; k < points_.size(); ++k) {
     out_[k].positions = borrow(&points_[k].position, 1);
@@ -374,7 +374,7 @@ bool ForearmDdsClient::send(const ModeCommandSample& command) {
   return impl_->commands.write(c);
 }
 
-bool ForearmDdsClient::send(const std::vector<host::TrajectoryPoint>& points) {
+bool ForearmDdsClient::send(const std::vector<trajectory::TrajectoryPoint>& points) {
   const TrajectorySample sample(points);
   return impl_->trajectories.write(sample.message());
 }

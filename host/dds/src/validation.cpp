@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "hmpc/host/joint_trajectory.hpp"
+#include "hmpc/trajectory/joint_trajectory.hpp"
 
 namespace hmpc::dds {
 
@@ -226,10 +226,11 @@ Verdict validate(const msg::JointTrajectory& trajectory, const JointLimits* join
       const JointLimits& joint = joints[index[i]];
       const auto point = [i](const msg::JointTrajectoryPoint& p) {
         const bool has_velocity = p.velocities._length > 0;
-        return host::TrajectoryPoint{to_seconds(p.time_from_start), p.positions._buffer[i],
-                                     has_velocity ? p.velocities._buffer[i] : 0, has_velocity};
+        return trajectory::TrajectoryPoint{to_seconds(p.time_from_start), p.positions._buffer[i],
+                                           has_velocity ? p.velocities._buffer[i] : 0,
+                                           has_velocity};
       };
-      const host::SegmentBounds bounds = host::segment_bounds(point(a), point(b));
+      const trajectory::SegmentBounds bounds = trajectory::segment_bounds(point(a), point(b));
       if (bounds.max_speed > joint.max_speed) {
         return Verdict::reject(Rejection::kRateLimit,
                                format("between points[%u] and [%u], %s moves at up to %g rad/s, "

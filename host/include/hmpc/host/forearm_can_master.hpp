@@ -13,13 +13,15 @@
 #include <cmath>
 #include <cstdint>
 
-#include "hmpc/host/joint_trajectory.hpp"
 #include "hmpc/models/forearm_target.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/trajectory/joint_trajectory.hpp"
 
 namespace hmpc::host {
 
 namespace proto = hmpc::forearm_protocol;
+using trajectory::JointTrajectoryTarget;
+using trajectory::TrajectoryPoint;
 
 struct ForearmMasterConfig {
   proto::NodeId node = 0;

@@ -24,8 +24,8 @@
 
 #include "hmpc/dds/participant.hpp"
 #include "hmpc/dds/validation.hpp"
-#include "hmpc/host/joint_trajectory.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
+#include "hmpc/trajectory/joint_target.hpp"
 
 namespace hmpc::dds {
 
@@ -36,13 +36,8 @@ inline constexpr const char* kJointName = "elbow";
 // lease); half a second of silence is long enough not to trip on a busy machine and short
 // enough that a lost operator is noticed before the arm has gone far.
 inline constexpr double kCommandDeadlineS = 0.5;
-// Target trajectories the host holds: 8192 points, e.g. 164 s at the 20 ms spacing the CLI
-// samples a sinusoid with.
-inline constexpr std::size_t kMaxTrajectoryPoints = 8192;
-// Fastest target motion accepted: above the 8.2 rad/s peak of a +-30 deg sinusoid at 2.5 Hz, the
-// highest frequency we ask the forearm to try, where the thesis tracked up to 1.8 Hz
-// (Sec. 3.4.2).
-inline constexpr double kMaxTargetSpeed = 10.0;  // rad/s
+// Target trajectories the host holds.
+inline constexpr std::size_t kMaxTrajectoryPoints = trajectory::kMaxPoints;
 // The board's diagnostics go out when they change, and at least this often (ROS 2's
 // diagnostic_updater publishes once a second).
 inline constexpr double kDiagnosticsPeriodS = 1.0;
@@ -50,8 +45,7 @@ inline constexpr double kDiagnosticsPeriodS = 1.0;
 // "/hmpc/forearm_<node>".
 std::string default_namespace(proto::NodeId node);
 
-// The joint's limits for targets: the board's software joint limits (firmware BoardConfig's
-// defaults, past which it faults) and kMaxTargetSpeed.
+// The joint's limits for targets: forearm::target_range() under the joint's name.
 const JointLimits& forearm_joint_limits();
 
 // The board's mode and its MPC's last solve, with the actuator outputs, in SI units: what
@@ -99,7 +93,7 @@ struct ModeCommandSample {
 // A validated target: points with times from its start, which is start_delay_s after receipt
 // (0 for an unstamped trajectory; negative when its stamp lies in the past).
 struct TrajectoryView {
-  const host::TrajectoryPoint* points = nullptr;
+  const trajectory::TrajectoryPoint* points = nullptr;
   std::size_t count = 0;
   double start_delay_s = 0;
 };
@@ -147,13 +141,13 @@ class ForearmDdsBridge {
 // over its own storage.
 class TrajectorySample {
  public:
-  explicit TrajectorySample(std::vector<host::TrajectoryPoint> points);
+  explicit TrajectorySample(std::vector<trajectory::TrajectoryPoint> points);
   TrajectorySample(const TrajectorySample&) = delete;
   TrajectorySample& operator=(const TrajectorySample&) = delete;
   const msg::JointTrajectory& message() const { return message_; }
 
  private:
-  std::vector<host::TrajectoryPoint> points_;
+  std::vector<trajectory::TrajectoryPoint> points_;
   std::vector<msg::JointTrajectoryPoint> out_;
   const char* names_[1] = {kJointName};
   msg::JointTrajectory message_{};
@@ -185,7 +179,7 @@ class ForearmDdsClient {
   bool wait_for_bridge(double timeout_s);
   bool send(const ModeCommandSample& command);
   // Points of the joint, starting on receipt. False if DDS refused the sample.
-  bool send(const std::vector<host::TrajectoryPoint>& points);
+  bool send(const std::vector<trajectory::TrajectoryPoint>& points);
   // Named cost weights. False if DDS refused the sample.
   bool send(const std::vector<std::pair<std::string, double>>& weights);
   // Waits until every matched bridge acknowledged what was sent; false on timeout.

@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace hmpc::host {
+namespace hmpc::trajectory {
 
 struct TrajectoryPoint {
   double time_s = 0;  // from the trajectory's start
@@ -110,4 +110,4 @@ class JointTrajectoryTarget {
   std::vector<TrajectoryPoint> points_;
 };
 
-}  // namespace hmpc::host
+}  // namespace hmpc::trajectory
