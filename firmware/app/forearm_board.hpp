@@ -22,6 +22,7 @@
 
 #include "board_runtime.hpp"
 #include "hmpc/control/load_velocity_feedback_pid.hpp"
+#include "hmpc/models/forearm_disturbance.hpp"
 #include "hmpc/models/forearm_mpc.hpp"
 #include "hmpc/mpc/compute_model.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
@@ -90,6 +91,10 @@ struct BoardConfig {
   }();
   forearm::Parameters<Scalar> model{};
   forearm::CostWeights<Scalar> weights{};
+  // Offset-free MPC (forearm_problems.hpp OffsetFree): the disturbance observer runs in hold
+  // and run, and every strategy's model carries its estimate. Off: the thesis's method.
+  bool offset_free = false;
+  typename forearm::DisturbanceObserver<Scalar>::Config disturbance_observer{};
   // HIL lock-step only: the processor this board emulates. Each MPC step is charged the
   // compute time this model predicts from the solver's work (mpc/compute_model.hpp): its
   // output acts only that many ticks later, the previous output holding meanwhile, and no new
@@ -132,6 +137,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   using State = Eigen::Matrix<Scalar, 3, 1>;
   using Control = Eigen::Matrix<Scalar, 2, 1>;
   using Pid = LoadVelocityFeedbackPid<Scalar>;
+  using Observer = forearm::DisturbanceObserver<Scalar>;
   // Seconds from an arbitrary origin, for the solver deadline; nullptr: no deadline (HIL
   // lock-step, where the simulator charges compute time itself).
   using WallClock = double (*)();
@@ -197,6 +203,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       // as the thesis's offline optimisation. The previous outputs stay applied meanwhile.
       with_strategy([&](auto& mpc) {
         forearm::set_time(mpc, host_time());
+        forearm::set_offset_free(mpc, offset_free());
         mpc.initialize(x_, forearm::kIterationCap, stop);
       });
       needs_initialization_ = false;
@@ -205,6 +212,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
     Control plan = plan_;
     with_strategy([&](auto& mpc) {
       forearm::set_time(mpc, host_time());
+      forearm::set_offset_free(mpc, offset_free());
       plan = mpc.update(x_, stop);
       usable_ = mpc.last_plan_usable();
       last_work_ = mpc.last_work();
@@ -279,6 +287,8 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   }
   // The last MPC step, as an MPC reports it (for telemetry and compute accounting).
   int last_iterations() const { return last_iterations_; }
+  // The disturbance observer's estimate, N·m (0 outside hold and run).
+  Scalar disturbance_estimate() const { return disturbance_.estimate; }
   bool last_plan_usable() const { return usable_; }
   LayerWork last_work() const { return last_work_; }
 
@@ -367,6 +377,14 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
       plan_ = pending_plan_;
       solve_pending_ = false;
     }
+    // The observer sees the arm while something holds it (the vented arm on its stop is not a
+    // disturbance to learn), with the motor voltage of the last tick.
+    if (mode == proto::BoardMode::kHold || mode == proto::BoardMode::kRun) {
+      Observer::update(config_.model, config_.disturbance_observer, disturbance_, x_(0), x_(1),
+                       x_(2), outputs_.v_m, kTick);
+    } else {
+      Observer::reset(disturbance_);
+    }
     switch (mode) {
       case proto::BoardMode::kHold: hold_step(); break;
       case proto::BoardMode::kRun: apply_plan(); break;
@@ -432,6 +450,10 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   void enter_hold() {
     hold_angle_ = x_(0);
     Pid::reset(pid_state_);
+  }
+
+  forearm::OffsetFree<Scalar> offset_free() const {
+    return {config_.offset_free, disturbance_.estimate};
   }
 
   // Entering run is cheap here (it may happen in a CAN handler); the strategy's offline
@@ -507,6 +529,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
   State x_ = State::Zero();
   Scalar hold_angle_ = 0;
   typename Pid::State pid_state_{};
+  typename Observer::State disturbance_{};
   Control plan_ = Control::Zero();
   Control pending_plan_ = Control::Zero();  // emulated target: computed, not yet ready
   bool solve_pending_ = false;

@@ -15,6 +15,7 @@ struct Options {
   bool emulate_cortex_m7 = false;  // lock-step: charge solves the STM32H743's compute time
   double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
   double fail_solver_at_s = 0;     // test hook (BoardConfig::solver_failure_from_tick); 0: never
+  bool offset_free = false;        // BoardConfig::offset_free
 };
 
 inline void print_usage(std::FILE* out) {
@@ -22,8 +23,8 @@ inline void print_usage(std::FILE* out) {
       out,
       "usage: hmpc-forearm-board [--interface IFACE] [--io-interface IFACE] [--node N] "
       "[--lockstep]\n"
-      "                          [--emulate-target cortex-m7] [--w-v W] [--duration SECONDS]\n"
-      "                          [--log FILE] [--fail-solver-at SECONDS]\n");
+      "                          [--emulate-target cortex-m7] [--w-v W] [--offset-free]\n"
+      "                          [--duration SECONDS] [--log FILE] [--fail-solver-at SECONDS]\n");
   print_board_options(out);
   std::fprintf(
       out,
@@ -33,6 +34,9 @@ inline void print_usage(std::FILE* out) {
       "                      STM32H743 board (Cortex-M7, 400 MHz) would take for that solve\n"
       "  --w-v W             the MPC's input-voltage weight w_v of Eq. 3.3, in [1e-6, 1]\n"
       "                      (default 0.002, the thesis's; Fig. 3.4 varies it)\n"
+      "  --offset-free       offset-free MPC: a disturbance observer on the joint, its estimate\n"
+      "                      in every strategy's model, the torque penalty counted beyond the\n"
+      "                      holding torque (default: the thesis's Eq. 3.1 and 3.3)\n"
       "  --fail-solver-at SECONDS\n"
       "                      test hook for fault tests: every MPC step from this board time on\n"
       "                      ends in a numerical failure\n"
@@ -52,6 +56,7 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
     return {};
   });
   parser.number("--w-v", 1e-6, 1, "a weight in [1e-6, 1]", options.w_v);
+  parser.flag("--offset-free", options.offset_free);
   parser.number("--fail-solver-at", 1e-3, kMaxDurationS, "a board time in [0.001, 1e6] s",
                 options.fail_solver_at_s);
   const ParseOutcome outcome = parser.parse(argc, argv, error);

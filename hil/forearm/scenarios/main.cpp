@@ -52,6 +52,8 @@ struct Options {
   hmpc::trajectory::TargetSpec target{};  // frequency_hz: each of `frequencies` in turn
   hmpc::hil::ForearmMismatch mismatch = kDefaultMismatch;
   bool weight_sweep = false;
+  // Each strategy as the thesis has it, offset-free (the board's --offset-free), or both.
+  std::vector<bool> offset_free{false};
   long jobs = 1;
 };
 
@@ -62,7 +64,7 @@ void print_usage(std::FILE* out) {
       "         [--duration S] [--noise SCALE] [--no-mismatch] [--mass-scale X]\n"
       "         [--friction-scale X] [--pam-time-scale X] [--weight-sweep] [--jobs N]\n"
       "         [--target SHAPE] [--amplitude-deg A] [--offset-deg D] [--chirp-to HZ]\n"
-      "         [--step-at S] [--step-rate-deg-s R] [--target-file FILE]\n"
+      "         [--step-at S] [--step-rate-deg-s R] [--target-file FILE] [--offset-free MODE]\n"
       "Runs board, host and Simbody plant in lock-step over vcan0 for each strategy, target\n"
       "frequency (+-30 deg sinusoids by default) and trial (a different noise seed each), and\n"
       "writes CSV, a markdown table and PNG plots to DIR. Run it with vcan0 up, e.g. through\n"
@@ -85,7 +87,10 @@ void print_usage(std::FILE* out) {
       "                      against the joint's range and speed before any run\n"
       "  --weight-sweep      also run Two-stage, Coarse 20 ms and Fine 4 ms at 1 Hz for\n"
       "                      w_v = 0.02, 0.002, 0.0002 (Fig. 3.4)\n"
-      "  --jobs N            runs at once, 1..4, each on its own board node id (default 1)\n");
+      "  --jobs N            runs at once, 1..4, each on its own board node id (default 1)\n"
+      "  --offset-free MODE  off (the thesis's MPC, default), on (the boards' offset-free MPC:\n"
+      "                      a disturbance observer, its estimate in the model), or both: each\n"
+      "                      strategy twice, the offset-free rows named STRATEGY_offset_free\n");
 }
 
 std::vector<std::string> split(const std::string& text) {
@@ -164,6 +169,17 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
     return {};
   });
   p.flag("--weight-sweep", o.weight_sweep);
+  p.text("--offset-free", [&](const std::string& v) -> std::string {
+    if (v == "off")
+      o.offset_free = {false};
+    else if (v == "on")
+      o.offset_free = {true};
+    else if (v == "both")
+      o.offset_free = {false, true};
+    else
+      return hmpc::cli::bad_value("--offset-free", "on, off or both", v);
+    return {};
+  });
   p.integer("--jobs", 1, 4, o.jobs);
   const auto outcome = p.parse(argc, argv, error);
   if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
@@ -243,11 +259,25 @@ std::string mismatch_text(const hmpc::hil::ForearmMismatch& m) {
 }
 
 struct Row {
-  std::string strategy;
+  std::string strategy;  // its name, with _offset_free for the offset-free MPC
   double frequency = 0, w_v = 0;
   long trial = 0;
   HilRunResult r;
+  proto::Strategy kind = proto::Strategy::kTwoStage;
+  bool offset_free = false;
 };
+
+std::string label(proto::Strategy s, bool offset_free) {
+  return name(s) + (offset_free ? "_offset_free" : "");
+}
+
+// The strategies' rows in the plots' order: each as the thesis has it, then offset-free.
+std::vector<std::string> labels(const Options& o) {
+  std::vector<std::string> out;
+  for (proto::Strategy s : o.strategies)
+    for (bool offset_free : o.offset_free) out.push_back(label(s, offset_free));
+  return out;
+}
 
 struct Stats {
   double mean = 0, stddev = 0;
@@ -401,9 +431,10 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
     for (std::size_t i = 0; i < o.frequencies.size(); ++i)
       gp << (i ? ", " : "") << "'" << target_label(o.frequencies[i]) << "' " << i;
     gp << ")\nplot ";
-    for (std::size_t s = 0; s < o.strategies.size(); ++s) {
-      const std::string n = name(o.strategies[s]);
-      const double shift = (double(s) - 0.5 * double(o.strategies.size() - 1)) * 0.13;
+    const std::vector<std::string> names = labels(o);
+    for (std::size_t s = 0; s < names.size(); ++s) {
+      const std::string& n = names[s];
+      const double shift = (double(s) - 0.5 * double(names.size() - 1)) * 0.13;
       gp << (s ? ", " : "") << "'" << out << "/" << file << "' using ((";
       for (std::size_t i = 0; i < o.frequencies.size(); ++i)
         gp << "abs($2-" << o.frequencies[i] << ")<1e-9?" << i << ":";
@@ -433,7 +464,10 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
        << " target, trial 1 (cf. Fig. 3.5)'\nset xlabel 'time (s)'\nset ylabel "
           "'angle (deg)'\nplot ";
     bool first = true;
-    for (const char* s : {"fine_4ms", "coarse_20ms", "two_stage"}) {
+    for (const std::string& s : labels(o)) {
+      if (s.rfind("fine_4ms", 0) != 0 && s.rfind("coarse_20ms", 0) != 0 &&
+          s.rfind("two_stage", 0) != 0)
+        continue;
       const std::string dir = run_dir(out, s, f, 0, 1);
       if (!std::filesystem::exists(dir + "/host.csv")) continue;
       if (first) {
@@ -449,7 +483,8 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
   }
   // Torques of the Two-stage run at the highest frequency.
   const double f_max = *std::max_element(o.frequencies.begin(), o.frequencies.end());
-  const std::string two_stage = run_dir(out, "two_stage", f_max, 0, 1);
+  const std::string two_stage =
+      run_dir(out, label(proto::Strategy::kTwoStage, o.offset_free.back()), f_max, 0, 1);
   if (std::filesystem::exists(two_stage + "/plant.csv")) {
     gp << "set output '" << out
        << "/hil_torques.png'\nset datafile separator ','\n"
@@ -501,13 +536,15 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   for (double f : o.frequencies)
     for (proto::Strategy s : o.strategies)
-      for (long trial = 1; trial <= o.trials; ++trial) rows.push_back({name(s), f, 0, trial, {}});
+      for (bool offset_free : o.offset_free)
+        for (long trial = 1; trial <= o.trials; ++trial)
+          rows.push_back({label(s, offset_free), f, 0, trial, {}, s, offset_free});
   if (o.weight_sweep) {
     for (double w_v : kSweepWeights)
       for (proto::Strategy s :
            {proto::Strategy::kFine4ms, proto::Strategy::kCoarse20ms, proto::Strategy::kTwoStage})
         for (long trial = 1; trial <= o.trials; ++trial)
-          rows.push_back({name(s), 1.0, w_v, trial, {}});
+          rows.push_back({name(s), 1.0, w_v, trial, {}, s, false});
   }
   // --jobs workers, each with its own board node id on the bus (the protocol's node filter
   // keeps their frames apart), take the runs in order.
@@ -518,7 +555,8 @@ int main(int argc, char** argv) {
     for (std::size_t i = next++; i < rows.size() && !failed; i = next++) {
       Row& row = rows[i];
       HilRunSpec spec;
-      strategy_from_name(row.strategy, spec.strategy);
+      spec.strategy = row.kind;
+      if (row.offset_free) spec.board_args.push_back("--offset-free");
       spec.node = node;
       spec.target = o.target;
       if (row.frequency > 0) spec.target.frequency_hz = row.frequency;

@@ -129,7 +129,10 @@ PamTorque<Scalar> pam_torque(const Parameters<Scalar>& p, Scalar pressure_bar, S
   return t;
 }
 
-// Joint acceleration theta'' of Eq. 3.1 and its partial derivatives.
+// Joint acceleration theta'' of Eq. 3.1 and its partial derivatives. `disturbance` is a torque
+// on the joint that Eq. 3.1 does not model (a payload, more friction, a valve slower than the
+// model's, as its effect on the joint), estimated for offset-free control
+// (forearm_disturbance.hpp); 0 is Eq. 3.1 itself.
 template <typename Scalar>
 struct JointAcceleration {
   Scalar value, d_theta, d_theta_dot, d_pressure, d_v_m;
@@ -137,7 +140,8 @@ struct JointAcceleration {
 
 template <typename Scalar>
 JointAcceleration<Scalar> joint_acceleration(const Parameters<Scalar>& p, Scalar theta,
-                                             Scalar theta_dot, Scalar pressure_bar, Scalar v_m) {
+                                             Scalar theta_dot, Scalar pressure_bar, Scalar v_m,
+                                             Scalar disturbance = Scalar(0)) {
   using std::cos;
   using std::sin;
   using std::tanh;
@@ -149,7 +153,7 @@ JointAcceleration<Scalar> joint_acceleration(const Parameters<Scalar>& p, Scalar
       -gravity_arm * cos(theta) - p.viscous_friction * theta_dot - p.coulomb_friction * smooth_sign;
   const PamTorque<Scalar> pam = pam_torque(p, pressure_bar, theta);
   JointAcceleration<Scalar> a;
-  a.value = inv_inertia * (c + pam.tau + p.motor_gain * v_m);
+  a.value = inv_inertia * (c + pam.tau + p.motor_gain * v_m + disturbance);
   a.d_theta = inv_inertia * (gravity_arm * sin(theta) + pam.d_theta);
   a.d_theta_dot = -inv_inertia * (p.viscous_friction + p.coulomb_friction *
                                                            (Scalar(1) - smooth_sign * smooth_sign) /
@@ -187,6 +191,21 @@ Eigen::Matrix<Scalar, 3, 1> integrate(const Parameters<Scalar>& p,
   const V k3 = state_derivative(p, V(x + Scalar(0.5) * dt * k2), u);
   const V k4 = state_derivative(p, V(x + dt * k3), u);
   return x + dt / Scalar(6) * (k1 + Scalar(2) * k2 + Scalar(2) * k3 + k4);
+}
+
+// The torque the actuators must supply to hold the arm still at theta against gravity and a
+// disturbance torque (friction is zero at rest), and its slope in theta.
+template <typename Scalar>
+struct HoldingTorque {
+  Scalar tau, d_theta;
+};
+template <typename Scalar>
+HoldingTorque<Scalar> holding_torque(const Parameters<Scalar>& p, Scalar theta,
+                                     Scalar disturbance) {
+  using std::cos;
+  using std::sin;
+  const Scalar gravity_arm = p.mass * p.gravity * p.com_distance;
+  return {gravity_arm * cos(theta) - disturbance, -gravity_arm * sin(theta)};
 }
 
 // Pressure at which the PAM alone holds the arm still at theta (gravity balance, friction

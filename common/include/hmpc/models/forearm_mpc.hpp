@@ -120,6 +120,20 @@ void set_weights(TwoLayerMpc<Upper, Nu, Fast, Nf, Layer>& mpc,
   mpc.fast_subsystem().set_weights(w);
 }
 
+// Offset-free control's setting and disturbance estimate for every problem of an MPC, before
+// an update.
+template <class Problem, int N>
+void set_offset_free(RecedingHorizonMpc<Problem, N>& mpc,
+                     const OffsetFree<typename Problem::Scalar>& o) {
+  mpc.problem().set_offset_free(o);
+}
+template <class Upper, int Nu, class Fast, int Nf, class Layer>
+void set_offset_free(TwoLayerMpc<Upper, Nu, Fast, Nf, Layer>& mpc,
+                     const OffsetFree<typename Upper::Scalar>& o) {
+  mpc.upper_problem().set_offset_free(o);
+  mpc.fast_subsystem().set_offset_free(o);
+}
+
 // Compute time of the forearm strategies on the STM32H743 board (Cortex-M7 at the 400 MHz our
 // board image runs at, firmware/boards/stm32h7; 480 MHz parts run 1.2x faster), double FPU:
 // instructions per unit of solver work, a least-squares fit (R^2 0.9997 over 1500 updates of
