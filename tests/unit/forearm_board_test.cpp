@@ -466,8 +466,16 @@ struct Mismatch {
   const char* name;
   double mass, friction, valve;
 };
+constexpr Mismatch kMismatches[] = {{"none", 1, 1, 1},
+                                    {"payload +30 %", 1.3, 1, 1},
+                                    {"friction x2", 1, 2, 1},
+                                    {"valve 50 % slower", 1, 1, 1.5},
+                                    {"all three", 1.3, 2, 1.5}};
 
-double settled_error(const Mismatch& m, bool offset_free, double* estimate) {
+// A rig whose plant has the mismatch, its board (offset-free or not) running the Two-stage MPC
+// on theta_d = offset + A sin(2 pi f t) after 100 ms of hold.
+std::unique_ptr<Rig> mismatched_run(const Mismatch& m, bool offset_free, double amplitude,
+                                    double frequency_hz, double offset) {
   hmpc::forearm::Parameters<double> plant;
   plant.mass *= m.mass;
   plant.viscous_friction *= m.friction;
@@ -475,12 +483,18 @@ double settled_error(const Mismatch& m, bool offset_free, double* estimate) {
   plant.T_p *= m.valve;
   Board::Config config = Rig::config();
   config.offset_free = offset_free;
-  Rig rig(0.0, nullptr, config, plant);
-  rig.run(20);
-  rig.command(RequestedMode::kHold);
-  rig.run(100);
-  rig.stream_sinusoid(0, 0, 0.3);
-  rig.command(RequestedMode::kRun, Strategy::kTwoStage);
+  auto rig = std::make_unique<Rig>(0.0, nullptr, config, plant);
+  rig->run(20);
+  rig->command(RequestedMode::kHold);
+  rig->run(100);
+  rig->stream_sinusoid(amplitude, frequency_hz, offset);
+  rig->command(RequestedMode::kRun, Strategy::kTwoStage);
+  return rig;
+}
+
+double settled_error(const Mismatch& m, bool offset_free, double* estimate) {
+  const std::unique_ptr<Rig> run = mismatched_run(m, offset_free, 0, 0, 0.3);
+  Rig& rig = *run;
   run_tracking(rig, 2000, nullptr);
   double sum = 0;
   for (int i = 0; i < 2000; ++i) {
@@ -492,14 +506,9 @@ double settled_error(const Mismatch& m, bool offset_free, double* estimate) {
 }
 
 TEST(ForearmBoard, OffsetFreeMpcHoldsAConstantTargetOnMismatchedPlants) {
-  const Mismatch cases[] = {{"none", 1, 1, 1},
-                            {"payload +30 %", 1.3, 1, 1},
-                            {"friction x2", 1, 2, 1},
-                            {"valve 50 % slower", 1, 1, 1.5},
-                            {"all three", 1.3, 2, 1.5}};
   constexpr double kDeg = M_PI / 180;
   double thesis_none = 0, thesis_payload = 0;
-  for (const Mismatch& m : cases) {
+  for (const Mismatch& m : kMismatches) {
     double d_free = 0, d_thesis = 0;
     const double e_free = settled_error(m, true, &d_free);
     const double e_thesis = settled_error(m, false, &d_thesis);
@@ -518,19 +527,8 @@ TEST(ForearmBoard, OffsetFreeMpcHoldsAConstantTargetOnMismatchedPlants) {
 // 3 s after the first second), with the disturbance estimate and without, side by side: with
 // it, the error is lower on every plant and grows less with the mismatch.
 double sinusoid_rms(const Mismatch& m, bool offset_free, double frequency_hz) {
-  hmpc::forearm::Parameters<double> plant;
-  plant.mass *= m.mass;
-  plant.viscous_friction *= m.friction;
-  plant.coulomb_friction *= m.friction;
-  plant.T_p *= m.valve;
-  Board::Config config = Rig::config();
-  config.offset_free = offset_free;
-  Rig rig(0.0, nullptr, config, plant);
-  rig.run(20);
-  rig.command(RequestedMode::kHold);
-  rig.run(100);
-  rig.stream_sinusoid(kAmplitude, frequency_hz, 0);
-  rig.command(RequestedMode::kRun, Strategy::kTwoStage);
+  const std::unique_ptr<Rig> run = mismatched_run(m, offset_free, kAmplitude, frequency_hz, 0);
+  Rig& rig = *run;
   run_tracking(rig, 1000, nullptr);
   Tracking tracking;
   run_tracking(rig, 3000, &tracking);
@@ -538,11 +536,7 @@ double sinusoid_rms(const Mismatch& m, bool offset_free, double frequency_hz) {
 }
 
 TEST(ForearmBoard, OffsetFreeMpcTracksSinusoidsOnMismatchedPlants) {
-  const Mismatch cases[] = {{"none", 1, 1, 1},
-                            {"payload +30 %", 1.3, 1, 1},
-                            {"friction x2", 1, 2, 1},
-                            {"valve 50 % slower", 1, 1, 1.5},
-                            {"all three", 1.3, 2, 1.5}};
+  const auto& cases = kMismatches;
   constexpr double kDeg = M_PI / 180;
   for (const double f : {0.5, 1.0}) {
     double free_rms[5], thesis_rms[5];

@@ -55,7 +55,7 @@ double worst_error(const JointTrajectoryTarget& target, double duration, Curve c
 
 std::string write_file(const std::string& name, const std::string& text) {
   const char* tmp = std::getenv("TMPDIR");
-  const std::string path = std::string(tmp ? tmp : "/tmp") + "/joint_target_test_" + name;
+  std::string path = std::string(tmp ? tmp : "/tmp") + "/joint_target_test_" + name;
   std::ofstream(path) << text;
   return path;
 }
@@ -149,7 +149,7 @@ TEST(JointTarget, TheRampIsATriangleWaveAtFourAmplitudesPerPeriod) {
 }
 
 TEST(JointTarget, ShapesTheJointCannotFollowAreRefusedWithTheReason) {
-  const auto refusal = [](TargetSpec spec) {
+  const auto refusal = [](const TargetSpec& spec) {
     std::vector<TrajectoryPoint> points;
     std::string error;
     EXPECT_FALSE(make_points(spec, kRange, kMaxPoints, points, error));

@@ -250,11 +250,17 @@ bool read_points_csv(const std::string& path, std::size_t max_points,
     header_allowed = false;
     const std::string where = path + ":" + std::to_string(line_number) + ": ";
     if (fields < 2 || fields > 3) {
-      error = where + "expected time_s,position_rad[,velocity_rad_s], got '" + line + "'";
+      error = where;
+      error += "expected time_s,position_rad[,velocity_rad_s], got '";
+      error += line;
+      error += "'";
       return false;
     }
     if (!numbers) {
-      error = where + "not a number in '" + line + "'";
+      error = where;
+      error += "not a number in '";
+      error += line;
+      error += "'";
       return false;
     }
     if (points.size() - first == max_points) {
