@@ -112,6 +112,23 @@ void check_scale(const char* field, double value) {
   }
 }
 
+void check_initial(const Parameters& p, const ForearmPlantState& x) {
+  if (!std::isfinite(x.theta) || !std::isfinite(x.theta_dot) || !std::isfinite(x.pressure_bar)) {
+    throw std::invalid_argument("SimbodyForearm: initial state must be finite");
+  }
+  if (x.theta < p.stop_lower || x.theta > p.stop_upper) {
+    throw std::invalid_argument("SimbodyForearm: initial theta " + std::to_string(x.theta) +
+                                " rad lies outside the stops [" + std::to_string(p.stop_lower) +
+                                ", " + std::to_string(p.stop_upper) + "]");
+  }
+  if (x.pressure_bar < 0) {
+    throw std::invalid_argument("SimbodyForearm: initial pressure_bar must be >= 0, got " +
+                                std::to_string(x.pressure_bar));
+  }
+}
+
+}  // namespace
+
 Parameters with_mismatch(const Parameters& model, const ForearmMismatch& m) {
   check_scale("mass_scale", m.mass_scale);
   check_scale("friction_scale", m.friction_scale);
@@ -129,23 +146,6 @@ Parameters with_mismatch(const Parameters& model, const ForearmMismatch& m) {
   plant.T_p *= m.pam_time_constant_scale;
   return plant;
 }
-
-void check_initial(const Parameters& p, const ForearmPlantState& x) {
-  if (!std::isfinite(x.theta) || !std::isfinite(x.theta_dot) || !std::isfinite(x.pressure_bar)) {
-    throw std::invalid_argument("SimbodyForearm: initial state must be finite");
-  }
-  if (x.theta < p.stop_lower || x.theta > p.stop_upper) {
-    throw std::invalid_argument("SimbodyForearm: initial theta " + std::to_string(x.theta) +
-                                " rad lies outside the stops [" + std::to_string(p.stop_lower) +
-                                ", " + std::to_string(p.stop_upper) + "]");
-  }
-  if (x.pressure_bar < 0) {
-    throw std::invalid_argument("SimbodyForearm: initial pressure_bar must be >= 0, got " +
-                                std::to_string(x.pressure_bar));
-  }
-}
-
-}  // namespace
 
 struct SimbodyForearm::Impl {
   Parameters plant;

@@ -25,6 +25,11 @@ struct ForearmMismatch {
   double mass_scale = 1, friction_scale = 1, pam_time_constant_scale = 1;
 };
 
+// The plant's parameters: the model's with the mismatch applied. Throws std::invalid_argument
+// naming the field if a factor is out of range or the model's end stops are malformed.
+forearm::Parameters<double> with_mismatch(const forearm::Parameters<double>& model,
+                                          const ForearmMismatch& mismatch);
+
 // theta (rad, from the horizontal, flexion positive), theta' (rad/s), PAM pressure (bar).
 struct ForearmPlantState {
   double theta = 0, theta_dot = 0, pressure_bar = 0;

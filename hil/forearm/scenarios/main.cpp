@@ -26,6 +26,7 @@
 #include "hil_run.hpp"
 #include "hmpc/cli/arguments.hpp"
 #include "hmpc/models/forearm_target_range.hpp"
+#include "hmpc/models/forearm_tracking_limit.hpp"
 
 namespace {
 
@@ -372,6 +373,21 @@ void write_tables(const std::string& out, const std::vector<Row>& rows, const Op
         g.frequency, g.w_v > 0 ? g.w_v : 0.002, g.strategy.c_str(), cost.mean, cost.stddev,
         err.mean, err.stddev, max_solve.mean, median_solve.mean, misses.mean, 100 * share.mean);
     md << line;
+  }
+  if (o.target.shape == hmpc::trajectory::TargetShape::kSine) {
+    // What the plant's actuators allow at all, so that a large error reads against it.
+    const hmpc::forearm::Parameters<double> plant =
+        hmpc::hil::with_mismatch(hmpc::forearm::Parameters<double>{}, o.mismatch);
+    md << "\nThe plant's actuator limit (first-harmonic bound, forearm_tracking_limit.hpp): ";
+    for (std::size_t i = 0; i < o.frequencies.size(); ++i) {
+      const hmpc::forearm::TrackingLimit l = hmpc::forearm::tracking_limit(
+          plant, o.frequencies[i], o.target.amplitude, o.target.offset);
+      std::snprintf(line, sizeof line, "%s%.2f Hz: +-%.1f deg, RMS error at least %.2f deg",
+                    i ? "; " : "", o.frequencies[i], l.max_amplitude * 180 / M_PI,
+                    l.rms_error_floor * 180 / M_PI);
+      md << line;
+    }
+    md << ".\n";
   }
   double hil_load = 0, robot_load = 0, rtf = 0;
   for (const Row& row : rows) {
