@@ -22,15 +22,6 @@ constexpr int kSamples = 2500;  // 10 s at 4 ms
 constexpr double kAmplitude = 30 * M_PI / 180;
 constexpr double kDegree = 180 / M_PI;
 
-struct BoardDelay {
-  double operator()(const hmpc::LayerWork& w) const { return kCortexM7ComputeModel.seconds(w); }
-};
-struct NoObserver {
-  void before_update(int) {}
-  template <class X, class U, class M>
-  void after_update(int, const X&, const U&, const M&) {}
-};
-
 struct Run {
   const Parameters<double>& plant;
   S::Setup setup;
@@ -43,10 +34,10 @@ struct Run {
   // RMS error (deg) of one strategy; the MPC is built on the heap (the Fine ones are large).
   template <class Mpc>
   double rms(std::unique_ptr<Mpc> mpc) const {
-    NoObserver observer;
+    NoTrackingObserver observer;
     const Eigen::Vector3d x0(0, 0, equilibrium_pressure(plant, 0.0));
-    return simulate_tracking<double>(*mpc, plant, setup.weights, target, x0, kSamples, BoardDelay{},
-                                     observer)
+    return simulate_tracking<double>(*mpc, plant, setup.weights, target, x0, kSamples,
+                                     CortexM7ComputeDelay{}, observer)
                .rms_error *
            kDegree;
   }

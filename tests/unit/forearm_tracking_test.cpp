@@ -18,22 +18,13 @@ using namespace hmpc::forearm;
 using S = Strategies<double>;
 constexpr int kSamples = 2500;  // 10 s at 4 ms (Sec. 3.3)
 
-struct BoardDelay {
-  double operator()(const hmpc::LayerWork& w) const { return kCortexM7ComputeModel.seconds(w); }
-};
-struct NoObserver {
-  void before_update(int) {}
-  template <class X, class U, class M>
-  void after_update(int, const X&, const U&, const M&) {}
-};
-
 template <class Mpc>
 TrackingOutcome<double> track(Mpc& mpc, const TargetTrajectory<double>& target) {
   const Parameters<double> p;
-  NoObserver observer;
+  NoTrackingObserver observer;
   const Eigen::Vector3d x0(0, 0, equilibrium_pressure(p, 0.0));
   return simulate_tracking<double>(mpc, p, CostWeights<double>{}, target, x0, kSamples,
-                                   BoardDelay{}, observer);
+                                   CortexM7ComputeDelay{}, observer);
 }
 
 std::map<Strategy, TrackingOutcome<double>> run_all(double frequency) {

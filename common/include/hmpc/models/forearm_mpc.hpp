@@ -149,6 +149,18 @@ struct NoComputeDelay {
   double operator()(const LayerWork&) const { return 0; }
 };
 
+// The board's computation delay: each update's compute time on the Cortex-M7.
+struct CortexM7ComputeDelay {
+  double operator()(const LayerWork& w) const { return kCortexM7ComputeModel.seconds(w); }
+};
+
+// An observer of simulate_tracking that looks at nothing.
+struct NoTrackingObserver {
+  void before_update(int) {}
+  template <class X, class U, class M>
+  void after_update(int, const X&, const U&, const M&) {}
+};
+
 template <typename Scalar>
 struct TrackingOutcome {
   Eigen::Matrix<Scalar, 3, 1> final_state;
