@@ -28,7 +28,6 @@ namespace hmpc::forearm {
 struct TrackingLimit {
   double pam_torque;       // N·m, the largest fundamental PAM torque at this frequency
   double motor_torque;     // N·m, the motor's
-  double torque_per_rad;   // N·m/rad, |-(I w^2 + K) + j w b|: what each radian of swing needs
   double max_amplitude;    // rad, A_max
   double rms_error_floor;  // rad, (A - A_max) / sqrt 2 for the asked amplitude A, or 0
 };
@@ -56,7 +55,6 @@ inline TrackingLimit tracking_limit(const Parameters<double>& p, double frequenc
   const double valve = largest_fundamental(p.v_p_min, p.v_p_max, p.k_vp * hold_pressure);
   l.pam_torque = pam.d_pressure * valve / std::hypot(p.k_vp, w * p.T_p);
   l.motor_torque = p.motor_gain * largest_fundamental(p.v_m_min, p.v_m_max, 0.0);
-  l.torque_per_rad = std::hypot(in_phase, quadrature);
   // |U(A)|^2 = (in_phase A)^2 + (quadrature A + coulomb)^2 = available^2, the positive root.
   const double available = l.pam_torque + l.motor_torque;
   const double a = in_phase * in_phase + quadrature * quadrature;
