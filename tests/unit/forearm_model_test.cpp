@@ -199,6 +199,17 @@ TEST_F(Fixture, FastSubsystemDerivativesMatchFiniteDifferences) {
     hmpc::central_difference_gradient_hessian(
         [&](const Fast::State& z) { return fast.running_cost(z, nu, j); }, zeta, g, unused);
     EXPECT_LT((d.lx - g).norm(), 1e-4 * (1 + g.norm()));
+    // The terminal cost, with the terminal rate term on every other sample: squares of affine
+    // functions of zeta (the pressure is frozen), so its Hessian is exact too.
+    fast.set_terminal_rate_time(i % 2 == 0 ? kTwoStageTerminalRateTime : 0.0);
+    Fast::TerminalDerivatives t;
+    fast.terminal_cost_derivatives(zeta, kTwoStageFineHorizon, t);
+    Eigen::Matrix2d h;
+    hmpc::central_difference_gradient_hessian(
+        [&](const Fast::State& z) { return fast.terminal_cost(z, kTwoStageFineHorizon); }, zeta, g,
+        h);
+    EXPECT_LT((t.lx - g).norm(), 1e-5 * (1 + g.norm()));
+    EXPECT_LT((t.lxx - h).norm(), 1e-3 * (1 + h.norm()));
   }
   // The composed motor input stays in -5..5 V through the bounds on nu.
   EXPECT_DOUBLE_EQ(fast.control_lower_bound(0)(0), -5.0 - (-2.0));
@@ -308,6 +319,50 @@ TEST(ForearmTarget, SinusoidAndSamples) {
   for (int i = 0; i < 300; ++i) t.push_sample(3.0 + i, i);
   EXPECT_EQ(t.sample_count(), TargetTrajectory<double>::kCapacity);
   EXPECT_NEAR(t.angle(301.5), 298.5, 1e-9);
+}
+
+// theta_d' is the derivative of theta_d: the sinusoid's against central differences, the
+// samples' the slope of the segment, 0 where the ends are held.
+TEST(ForearmTarget, RateIsTheDerivativeOfTheAngle) {
+  TargetTrajectory<double> t;
+  t.set_sinusoid(0.5, 1.8, 0.1, 0.3);
+  for (double time : {0.0, 0.1, 0.37, 1.2}) {
+    const double fd = (t.angle(time + 1e-6) - t.angle(time - 1e-6)) / 2e-6;
+    EXPECT_NEAR(t.rate(time), fd, 1e-6 * (1 + std::abs(fd))) << "t = " << time;
+  }
+  EXPECT_EQ(t.rate(0.0), 0.5 * 2 * M_PI * 1.8 * std::cos(2 * M_PI * 1.8 * -0.3));
+  t.push_sample(1.0, 0.2);
+  EXPECT_EQ(t.rate(1.0), 0.0) << "one sample: held";
+  t.push_sample(2.0, 0.4);
+  t.push_sample(2.5, 0.3);
+  EXPECT_NEAR(t.rate(1.0), 0.2, 1e-12);
+  EXPECT_NEAR(t.rate(1.99), 0.2, 1e-12);
+  EXPECT_NEAR(t.rate(2.0), -0.2, 1e-12);
+  EXPECT_EQ(t.rate(0.5), 0.0) << "held before the first sample";
+  EXPECT_EQ(t.rate(2.5), 0.0) << "held from the last sample on";
+}
+
+// The terminal rate term prices the rate error at the horizon's end as w_theta prices an angle
+// error T_v later, and nothing else: on the target's rate it adds nothing.
+TEST_F(Fixture, TerminalRateTermPricesTheRateErrorOnly) {
+  Fast thesis(p, w, kTwoStageFineStep, &target);
+  Fast rate(p, w, kTwoStageFineStep, &target);
+  rate.set_terminal_rate_time(0.4);
+  EXPECT_EQ(thesis.terminal_rate_time(), 0.0) << "the thesis's cost by default";
+  const V3 x0(0.2, -1.0, 2.2);
+  hold_rollout_as_reference(p, w, target, thesis, x0, V2(-2.0, 3.0), nullptr);
+  std::vector<V3> rollout;
+  hold_rollout_as_reference(p, w, target, rate, x0, V2(-2.0, 3.0), &rollout);
+  const int n = kTwoStageFineHorizon;
+  const double target_rate = target.rate(n * kTwoStageFineStep);
+  const Fast::State on_rate(0.05, target_rate - rollout[n](1));
+  EXPECT_NEAR(rate.terminal_cost(on_rate, n), thesis.terminal_cost(on_rate, n), 1e-12);
+  const Fast::State off_rate(0.05, on_rate(1) + 0.5);
+  EXPECT_NEAR(rate.terminal_cost(off_rate, n) - thesis.terminal_cost(off_rate, n),
+              w.w_theta * (0.4 * 0.5) * (0.4 * 0.5), 1e-9);
+  EXPECT_EQ(rate.running_cost(off_rate, Fast::Control(0.3), 3),
+            thesis.running_cost(off_rate, Fast::Control(0.3), 3))
+      << "the running cost stays Eq. 3.3a";
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "board_options.hpp"
+#include "hmpc/models/forearm_mpc.hpp"
 #include "hmpc/protocol/forearm_protocol.hpp"
 
 namespace hmpc::linux_board {
@@ -16,6 +17,7 @@ struct Options {
   double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
   double fail_solver_at_s = 0;     // test hook (BoardConfig::solver_failure_from_tick); 0: never
   bool offset_free = false;        // BoardConfig::offset_free
+  bool terminal_rate = false;      // BoardConfig::terminal_rate_time = kTwoStageTerminalRateTime
 };
 
 inline void print_usage(std::FILE* out) {
@@ -24,6 +26,7 @@ inline void print_usage(std::FILE* out) {
       "usage: hmpc-forearm-board [--interface IFACE] [--io-interface IFACE] [--node N] "
       "[--lockstep]\n"
       "                          [--emulate-target cortex-m7] [--w-v W] [--offset-free]\n"
+      "                          [--terminal-rate]\n"
       "                          [--duration SECONDS] [--log FILE] [--fail-solver-at SECONDS]\n");
   print_board_options(out);
   std::fprintf(
@@ -37,12 +40,16 @@ inline void print_usage(std::FILE* out) {
       "  --offset-free       offset-free MPC: a disturbance observer on the joint, its estimate\n"
       "                      in every strategy's model, the torque penalty counted beyond the\n"
       "                      holding torque (default: the thesis's Eq. 3.1 and 3.3)\n"
+      "  --terminal-rate     the Two-stage's second stage also prices the joint rate's error\n"
+      "                      at its horizon's end, w_theta T_v^2 (theta' - theta_d')^2 with\n"
+      "                      T_v %g s (default: the thesis's Eq. 3.3b)\n"
       "  --fail-solver-at SECONDS\n"
       "                      test hook for fault tests: every MPC step from this board time on\n"
       "                      ends in a numerical failure\n"
       "On exit the board commands safe outputs (valve vented, motor off). Exit status: 0 on\n"
       "SIGINT, SIGTERM or the end of --duration; 1 when the interface or the log cannot be\n"
-      "used; 2 for bad arguments.\n");
+      "used; 2 for bad arguments.\n",
+      forearm::kTwoStageTerminalRateTime);
 }
 
 using cli::ParseOutcome;
@@ -57,6 +64,7 @@ inline ParseOutcome parse_options(int argc, char** argv, Options& options, std::
   });
   parser.number("--w-v", 1e-6, 1, "a weight in [1e-6, 1]", options.w_v);
   parser.flag("--offset-free", options.offset_free);
+  parser.flag("--terminal-rate", options.terminal_rate);
   parser.number("--fail-solver-at", 1e-3, kMaxDurationS, "a board time in [0.001, 1e6] s",
                 options.fail_solver_at_s);
   const ParseOutcome outcome = parser.parse(argc, argv, error);

@@ -55,6 +55,9 @@ struct Options {
   bool weight_sweep = false;
   // Each strategy as the thesis has it, offset-free (the board's --offset-free), or both.
   std::vector<bool> offset_free{false};
+  // The Two-stage as the thesis has it, with the second stage's terminal rate term (the board's
+  // --terminal-rate), or both.
+  std::vector<bool> terminal_rate{false};
   long jobs = 1;
 };
 
@@ -66,6 +69,7 @@ void print_usage(std::FILE* out) {
       "         [--friction-scale X] [--pam-time-scale X] [--weight-sweep] [--jobs N]\n"
       "         [--target SHAPE] [--amplitude-deg A] [--offset-deg D] [--chirp-to HZ]\n"
       "         [--step-at S] [--step-rate-deg-s R] [--target-file FILE] [--offset-free MODE]\n"
+      "         [--terminal-rate MODE]\n"
       "Runs board, host and Simbody plant in lock-step over vcan0 for each strategy, target\n"
       "frequency (+-30 deg sinusoids by default) and trial (a different noise seed each), and\n"
       "writes CSV, a markdown table and PNG plots to DIR. Run it with vcan0 up, e.g. through\n"
@@ -91,7 +95,10 @@ void print_usage(std::FILE* out) {
       "  --jobs N            runs at once, 1..4, each on its own board node id (default 1)\n"
       "  --offset-free MODE  off (the thesis's MPC, default), on (the boards' offset-free MPC:\n"
       "                      a disturbance observer, its estimate in the model), or both: each\n"
-      "                      strategy twice, the offset-free rows named STRATEGY_offset_free\n");
+      "                      strategy twice, the offset-free rows named STRATEGY_offset_free\n"
+      "  --terminal-rate MODE off (the thesis's Two-stage, default), on (its second stage with\n"
+      "                      the terminal rate term, the boards' --terminal-rate), or both: the\n"
+      "                      Two-stage twice, the second named two_stage_terminal_rate\n");
 }
 
 std::vector<std::string> split(const std::string& text) {
@@ -170,17 +177,21 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
     return {};
   });
   p.flag("--weight-sweep", o.weight_sweep);
-  p.text("--offset-free", [&](const std::string& v) -> std::string {
-    if (v == "off")
-      o.offset_free = {false};
-    else if (v == "on")
-      o.offset_free = {true};
-    else if (v == "both")
-      o.offset_free = {false, true};
-    else
-      return hmpc::cli::bad_value("--offset-free", "on, off or both", v);
-    return {};
-  });
+  const auto modes = [](const char* option, std::vector<bool>& out) {
+    return [option, &out](const std::string& v) -> std::string {
+      if (v == "off")
+        out = {false};
+      else if (v == "on")
+        out = {true};
+      else if (v == "both")
+        out = {false, true};
+      else
+        return hmpc::cli::bad_value(option, "on, off or both", v);
+      return {};
+    };
+  };
+  p.text("--offset-free", modes("--offset-free", o.offset_free));
+  p.text("--terminal-rate", modes("--terminal-rate", o.terminal_rate));
   p.integer("--jobs", 1, 4, o.jobs);
   const auto outcome = p.parse(argc, argv, error);
   if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
@@ -259,24 +270,40 @@ std::string mismatch_text(const hmpc::hil::ForearmMismatch& m) {
   return text;
 }
 
+// One strategy as a board runs it: the thesis's, or with our additions.
+struct Variant {
+  proto::Strategy kind = proto::Strategy::kTwoStage;
+  bool offset_free = false;
+  bool terminal_rate = false;  // the Two-stage's only
+};
+
+std::string label(const Variant& v) {
+  return name(v.kind) + (v.terminal_rate ? "_terminal_rate" : "") +
+         (v.offset_free ? "_offset_free" : "");
+}
+
+// Every strategy's variants in the tables' and plots' order: each as the thesis has it first.
+std::vector<Variant> variants(const Options& o) {
+  std::vector<Variant> out;
+  for (proto::Strategy s : o.strategies)
+    for (bool terminal_rate : o.terminal_rate) {
+      if (terminal_rate && s != proto::Strategy::kTwoStage) continue;
+      for (bool offset_free : o.offset_free) out.push_back({s, offset_free, terminal_rate});
+    }
+  return out;
+}
+
 struct Row {
-  std::string strategy;  // its name, with _offset_free for the offset-free MPC
+  std::string strategy;  // label(variant)
   double frequency = 0, w_v = 0;
   long trial = 0;
   HilRunResult r;
-  proto::Strategy kind = proto::Strategy::kTwoStage;
-  bool offset_free = false;
+  Variant variant;
 };
 
-std::string label(proto::Strategy s, bool offset_free) {
-  return name(s) + (offset_free ? "_offset_free" : "");
-}
-
-// The strategies' rows in the plots' order: each as the thesis has it, then offset-free.
 std::vector<std::string> labels(const Options& o) {
   std::vector<std::string> out;
-  for (proto::Strategy s : o.strategies)
-    for (bool offset_free : o.offset_free) out.push_back(label(s, offset_free));
+  for (const Variant& v : variants(o)) out.push_back(label(v));
   return out;
 }
 
@@ -499,8 +526,9 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
   }
   // Torques of the Two-stage run at the highest frequency.
   const double f_max = *std::max_element(o.frequencies.begin(), o.frequencies.end());
-  const std::string two_stage =
-      run_dir(out, label(proto::Strategy::kTwoStage, o.offset_free.back()), f_max, 0, 1);
+  const std::string two_stage = run_dir(
+      out, label({proto::Strategy::kTwoStage, o.offset_free.back(), o.terminal_rate.back()}), f_max,
+      0, 1);
   if (std::filesystem::exists(two_stage + "/plant.csv")) {
     gp << "set output '" << out
        << "/hil_torques.png'\nset datafile separator ','\n"
@@ -551,16 +579,15 @@ int main(int argc, char** argv) {
   // Every run to make, in the order of the tables; each gets its row slot.
   std::vector<Row> rows;
   for (double f : o.frequencies)
-    for (proto::Strategy s : o.strategies)
-      for (bool offset_free : o.offset_free)
-        for (long trial = 1; trial <= o.trials; ++trial)
-          rows.push_back({label(s, offset_free), f, 0, trial, {}, s, offset_free});
+    for (const Variant& v : variants(o))
+      for (long trial = 1; trial <= o.trials; ++trial)
+        rows.push_back({label(v), f, 0, trial, {}, v});
   if (o.weight_sweep) {
     for (double w_v : kSweepWeights)
       for (proto::Strategy s :
            {proto::Strategy::kFine4ms, proto::Strategy::kCoarse20ms, proto::Strategy::kTwoStage})
         for (long trial = 1; trial <= o.trials; ++trial)
-          rows.push_back({name(s), 1.0, w_v, trial, {}, s, false});
+          rows.push_back({name(s), 1.0, w_v, trial, {}, Variant{s}});
   }
   // --jobs workers, each with its own board node id on the bus (the protocol's node filter
   // keeps their frames apart), take the runs in order.
@@ -571,8 +598,9 @@ int main(int argc, char** argv) {
     for (std::size_t i = next++; i < rows.size() && !failed; i = next++) {
       Row& row = rows[i];
       HilRunSpec spec;
-      spec.strategy = row.kind;
-      if (row.offset_free) spec.board_args.push_back("--offset-free");
+      spec.strategy = row.variant.kind;
+      if (row.variant.offset_free) spec.board_args.push_back("--offset-free");
+      if (row.variant.terminal_rate) spec.board_args.push_back("--terminal-rate");
       spec.node = node;
       spec.target = o.target;
       if (row.frequency > 0) spec.target.frequency_hz = row.frequency;

@@ -198,6 +198,12 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
 // plan arrives held on the fine grid (Eq. 2.35); zeta is re-referenced where the held plan
 // steps, so the underlying joint evolves continuously. The cost is Eq. 3.3 with the voltage
 // term replaced by w_v nu^2 (Sec. 3.3: "the deviation of the fast control input").
+//
+// Terminal rate term (our addition, off by default): w_theta T_v^2 (theta'_N - theta_d'(t_N))^2
+// beside Eq. 3.3b. The second stage looks only 80 ms ahead, and Eq. 3.3b prices the angle at
+// its end but not the rate: a plan may end on target while moving away from it, an error that
+// grows as (theta' - theta_d') T_v over the next T_v seconds, past the horizon. The term
+// prices that error as w_theta prices an angle error. T_v = 0 is the thesis's cost.
 template <typename Scalar, int NFast>
 class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1> {
   using Base = ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1>;
@@ -221,6 +227,8 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
   void set_weights(const CostWeights<Scalar>& w) { w_ = w; }
   const CostWeights<Scalar>& weights() const { return w_; }
   void set_offset_free(const OffsetFree<Scalar>& o) { offset_free_ = o; }
+  void set_terminal_rate_time(Scalar t_v) { terminal_rate_time_ = t_v; }
+  Scalar terminal_rate_time() const { return terminal_rate_time_; }
 
   void set_reference(int j, const FullState& x_hat, const FullControl& u_hat) {
     theta_hat_[j] = x_hat(0);
@@ -252,7 +260,8 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
     return cost(zeta, nu, j, true).value + w_.w_v * nu(0) * nu(0);
   }
   Scalar terminal_cost(const State& zeta, int j) const {
-    return cost(zeta, Control::Zero(), j, false).value;
+    const Scalar e_v = rate_error(zeta, j);
+    return cost(zeta, Control::Zero(), j, false).value + rate_weight() * e_v * e_v;
   }
   void running_cost_derivatives(const State& zeta, const Control& nu, int j,
                                 RunningDerivatives& d) const {
@@ -265,8 +274,8 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
   }
   void terminal_cost_derivatives(const State& zeta, int j, TerminalDerivatives& d) const {
     const TrackingCost<Scalar> c = cost(zeta, Control::Zero(), j, false);
-    d.lx << c.d_theta, Scalar(0);
-    d.lxx << c.d_theta_theta, Scalar(0), Scalar(0), Scalar(0);
+    d.lx << c.d_theta, Scalar(2) * rate_weight() * rate_error(zeta, j);
+    d.lxx << c.d_theta_theta, Scalar(0), Scalar(0), Scalar(2) * rate_weight();
   }
 
   // The composed motor input stays within -5..5 V.
@@ -279,8 +288,13 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
                       pressure_hat_[j], v_m_hat_[j] + nu(0),
                       offset_free_.enabled ? offset_free_.disturbance : Scalar(0));
   }
+  Scalar time(int j) const { return start_time_ + Scalar(j) * h_; }
+  Scalar rate_weight() const { return w_.w_theta * terminal_rate_time_ * terminal_rate_time_; }
+  Scalar rate_error(const State& zeta, int j) const {
+    return zeta(1) + theta_dot_hat_[j] - target_->rate(time(j));
+  }
   TrackingCost<Scalar> cost(const State& zeta, const Control& nu, int j, bool running) const {
-    const Scalar theta_d = target_->angle(start_time_ + Scalar(j) * h_);
+    const Scalar theta_d = target_->angle(time(j));
     return tracking_cost(p_, w_, zeta(0) + theta_hat_[j], theta_d, pressure_hat_[j],
                          v_m_hat_[j] + nu(0), running, offset_free_);
   }
@@ -291,6 +305,7 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
   const TargetTrajectory<Scalar>* target_;
   Scalar start_time_ = 0;
   OffsetFree<Scalar> offset_free_{};
+  Scalar terminal_rate_time_ = 0;
   std::array<Scalar, NFast + 1> theta_hat_{};
   std::array<Scalar, NFast + 1> theta_dot_hat_{};
   std::array<Scalar, NFast + 1> pressure_hat_{};

@@ -64,14 +64,25 @@ class TargetTrajectory {
     if (count_ == 0) return Scalar(0);
     if (t <= sample(0).time) return sample(0).angle;
     if (t >= sample(count_ - 1).time) return sample(count_ - 1).angle;
-    int lo = 0, hi = count_ - 1;  // binary search: sample(lo).time <= t < sample(hi).time
-    while (hi - lo > 1) {
-      const int mid = (lo + hi) / 2;
-      (sample(mid).time <= t ? lo : hi) = mid;
-    }
+    const int lo = segment(t);
     const Sample& a = sample(lo);
-    const Sample& b = sample(hi);
+    const Sample& b = sample(lo + 1);
     return a.angle + (b.angle - a.angle) * (t - a.time) / (b.time - a.time);
+  }
+
+  // theta_d'(t) [rad/s]: the sinusoid's derivative, or the slope of the samples' segment
+  // holding t (0 where the ends are held).
+  Scalar rate(Scalar t) const {
+    if (mode_ == Mode::kSinusoid) {
+      using std::cos;
+      const Scalar omega = Scalar(2) * kPi<Scalar> * frequency_;
+      return amplitude_ * omega * cos(omega * (t - t0_));
+    }
+    if (count_ < 2 || t < sample(0).time || t >= sample(count_ - 1).time) return Scalar(0);
+    const int lo = segment(t);
+    const Sample& a = sample(lo);
+    const Sample& b = sample(lo + 1);
+    return (b.angle - a.angle) / (b.time - a.time);
   }
 
  private:
@@ -80,6 +91,16 @@ class TargetTrajectory {
     Scalar time, angle;
   };
   const Sample& sample(int i) const { return samples_[(head_ + i) % kCapacity]; }
+  // Binary search for lo with sample(lo).time <= t < sample(lo + 1).time, for t inside the
+  // samples' span.
+  int segment(Scalar t) const {
+    int lo = 0, hi = count_ - 1;
+    while (hi - lo > 1) {
+      const int mid = (lo + hi) / 2;
+      (sample(mid).time <= t ? lo : hi) = mid;
+    }
+    return lo;
+  }
 
   Mode mode_ = Mode::kSinusoid;
   Scalar amplitude_ = 0, frequency_ = 0, offset_ = 0, t0_ = 0;
