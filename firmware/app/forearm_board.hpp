@@ -97,7 +97,7 @@ struct BoardConfig {
   typename forearm::DisturbanceObserver<Scalar>::Config disturbance_observer{};
   // The Two-stage's second-stage terminal rate term T_v [s] (ForearmFastSubsystem); 0: the
   // thesis's cost.
-  Scalar terminal_rate_time = Scalar(0);
+  Scalar second_stage_terminal_rate_time = Scalar(0);
   // HIL lock-step only: the processor this board emulates. Each MPC step is charged the
   // compute time this model predicts from the solver's work (mpc/compute_model.hpp): its
   // output acts only that many ticks later, the previous output holding meanwhile, and no new
@@ -301,7 +301,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
     s.parameters = config_.model;
     s.weights = config_.weights;
     s.target = &target_;
-    s.terminal_rate_time = config_.terminal_rate_time;
+    s.second_stage_terminal_rate_time = config_.second_stage_terminal_rate_time;
     return s;
   }
 

@@ -92,6 +92,7 @@ TEST_F(Fixture, CostGradientsMatchFiniteDifferencesAndHessianIsPsd) {
   problem.set_start_time(0.3);
   for (int i = 0; i < 50; ++i) {
     problem.set_offset_free({i % 2 == 1, uniform(-2, 2)});
+    problem.set_terminal_rate_time(i % 3 == 0 ? 0.2 : 0.0);
     const V3 x = random_state();
     const V2 u = random_input();
     const int k = i % 10;

@@ -17,7 +17,7 @@ struct Options {
   double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
   double fail_solver_at_s = 0;     // test hook (BoardConfig::solver_failure_from_tick); 0: never
   bool offset_free = false;        // BoardConfig::offset_free
-  bool terminal_rate = false;      // BoardConfig::terminal_rate_time = kTwoStageTerminalRateTime
+  bool terminal_rate = false;      // the Two-stage's second stage: T_v kTwoStageTerminalRateTime
 };
 
 inline void print_usage(std::FILE* out) {

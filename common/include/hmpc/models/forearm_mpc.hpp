@@ -73,17 +73,24 @@ struct Strategies {
     Parameters<Scalar> parameters{};
     CostWeights<Scalar> weights{};
     const TargetTrajectory<Scalar>* target = nullptr;
-    // The Two-stage's second-stage terminal rate term T_v [s]; 0 is the thesis's cost.
+    // The terminal rate term's T_v [s] (forearm_problems.hpp) in every whole-horizon problem
+    // (Fine, Coarse, the Two-stage's first stage), and in the Two-stage's second stage; 0 is
+    // the thesis's cost.
     Scalar terminal_rate_time = 0;
+    Scalar second_stage_terminal_rate_time = 0;
   };
 
   static int samples_per_step(double step) {
     return static_cast<int>(std::lround(step / kControlPeriod));
   }
+  static Problem problem(const Setup& s, double step) {
+    Problem p(s.parameters, s.weights, Scalar(step), s.target);
+    p.set_terminal_rate_time(s.terminal_rate_time);
+    return p;
+  }
   template <class Mpc>
   static Mpc single(const Setup& s, double step) {
-    return Mpc(Problem(s.parameters, s.weights, Scalar(step), s.target),
-               {samples_per_step(step), solver_config<Scalar>()});
+    return Mpc(problem(s, step), {samples_per_step(step), solver_config<Scalar>()});
   }
 
   static Fine4 fine4(const Setup& s) { return single<Fine4>(s, kFine4Step); }
@@ -97,8 +104,8 @@ struct Strategies {
   }
   static TwoStage two_stage(const Setup& s) {
     Fast fast(s.parameters, s.weights, Scalar(kTwoStageFineStep), s.target);
-    fast.set_terminal_rate_time(s.terminal_rate_time);
-    return TwoStage(Problem(s.parameters, s.weights, Scalar(kCoarse20Step), s.target), fast,
+    fast.set_terminal_rate_time(s.second_stage_terminal_rate_time);
+    return TwoStage(problem(s, kCoarse20Step), fast,
                     {kTwoStageFineStepsPerCoarseStep, samples_per_step(kCoarse20Step),
                      solver_config<Scalar>(), solver_config<Scalar>()});
   }

@@ -78,6 +78,24 @@ TrackingCost<Scalar> tracking_cost(const Parameters<Scalar>& p, const CostWeight
   return c;
 }
 
+// Terminal rate term (our addition, off by default): w_theta T_v^2 (theta'_N - theta_d'(t_N))^2
+// beside Eq. 3.3b. Eq. 3.3b prices the angle at the horizon's end but not the rate: a plan may
+// end on target while moving away from it, an error that grows as (theta' - theta_d') T_v over
+// the next T_v seconds, past the horizon. The term prices that error as w_theta prices an angle
+// error. T_v = 0 is the thesis's cost.
+template <typename Scalar>
+struct TerminalRateTerm {
+  Scalar value = 0, d_rate = 0, d_rate_rate = 0;
+};
+
+template <typename Scalar>
+TerminalRateTerm<Scalar> terminal_rate_term(const CostWeights<Scalar>& w, Scalar t_v,
+                                            Scalar theta_dot, Scalar theta_d_dot) {
+  const Scalar weight = w.w_theta * t_v * t_v;
+  const Scalar e = theta_dot - theta_d_dot;
+  return {weight * e * e, Scalar(2) * weight * e, Scalar(2) * weight};
+}
+
 // One symplectic Euler step of the joint with its Jacobian in (theta, theta', P, v_m).
 template <typename Scalar>
 struct JointStep {
@@ -129,6 +147,7 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
   const Parameters<Scalar>& parameters() const { return p_; }
   void set_offset_free(const OffsetFree<Scalar>& o) { offset_free_ = o; }
   const OffsetFree<Scalar>& offset_free() const { return offset_free_; }
+  void set_terminal_rate_time(Scalar t_v) { terminal_rate_time_ = t_v; }
   Scalar target_angle(int k) const { return target_->angle(start_time_ + Scalar(k) * h_); }
 
   State dynamics(const State& x, const Control& u, int) const {
@@ -150,9 +169,10 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
     return tracking_cost(p_, w_, x(0), target_angle(k), x(2), u(0), true, offset_free_).value +
            w_.w_v * u.squaredNorm();
   }
-  // Eq. 3.3b, at the end of the horizon (k = N).
+  // Eq. 3.3b, at the end of the horizon (k = N), with the terminal rate term when enabled.
   Scalar terminal_cost(const State& x, int k) const {
-    return tracking_cost(p_, w_, x(0), target_angle(k), x(2), Scalar(0), false).value;
+    return tracking_cost(p_, w_, x(0), target_angle(k), x(2), Scalar(0), false).value +
+           rate_term(x, k).value;
   }
 
   void running_cost_derivatives(const State& x, const Control& u, int k,
@@ -169,8 +189,9 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
   void terminal_cost_derivatives(const State& x, int k, TerminalDerivatives& d) const {
     const TrackingCost<Scalar> c =
         tracking_cost(p_, w_, x(0), target_angle(k), x(2), Scalar(0), false);
-    d.lx << c.d_theta, Scalar(0), c.d_pressure;
-    d.lxx << c.d_theta_theta, Scalar(0), c.d_theta_pressure, Scalar(0), Scalar(0), Scalar(0),
+    const TerminalRateTerm<Scalar> r = rate_term(x, k);
+    d.lx << c.d_theta, r.d_rate, c.d_pressure;
+    d.lxx << c.d_theta_theta, Scalar(0), c.d_theta_pressure, Scalar(0), r.d_rate_rate, Scalar(0),
         c.d_theta_pressure, Scalar(0), c.d_pressure_pressure;
   }
 
@@ -183,6 +204,10 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
 
  private:
   Scalar disturbance() const { return offset_free_.enabled ? offset_free_.disturbance : Scalar(0); }
+  TerminalRateTerm<Scalar> rate_term(const State& x, int k) const {
+    return terminal_rate_term(w_, terminal_rate_time_, x(1),
+                              target_->rate(start_time_ + Scalar(k) * h_));
+  }
 
   Parameters<Scalar> p_;
   CostWeights<Scalar> w_;
@@ -191,6 +216,7 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
   Scalar start_time_ = 0;
   bool motor_enabled_ = true;
   OffsetFree<Scalar> offset_free_{};
+  Scalar terminal_rate_time_ = 0;
 };
 
 // Fast subsystem of Eq. 3.2 for the second stage, horizon NFast: P frozen at the coarse plan's
@@ -198,12 +224,8 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
 // plan arrives held on the fine grid (Eq. 2.35); zeta is re-referenced where the held plan
 // steps, so the underlying joint evolves continuously. The cost is Eq. 3.3 with the voltage
 // term replaced by w_v nu^2 (Sec. 3.3: "the deviation of the fast control input").
-//
-// Terminal rate term (our addition, off by default): w_theta T_v^2 (theta'_N - theta_d'(t_N))^2
-// beside Eq. 3.3b. The second stage looks only 80 ms ahead, and Eq. 3.3b prices the angle at
-// its end but not the rate: a plan may end on target while moving away from it, an error that
-// grows as (theta' - theta_d') T_v over the next T_v seconds, past the horizon. The term
-// prices that error as w_theta prices an angle error. T_v = 0 is the thesis's cost.
+// Its terminal cost may carry the terminal rate term, which matters most here: the second
+// stage looks only 80 ms ahead.
 template <typename Scalar, int NFast>
 class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1> {
   using Base = ProblemBase<ForearmFastSubsystem<Scalar, NFast>, Scalar, 2, 1>;
@@ -260,8 +282,7 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
     return cost(zeta, nu, j, true).value + w_.w_v * nu(0) * nu(0);
   }
   Scalar terminal_cost(const State& zeta, int j) const {
-    const Scalar e_v = rate_error(zeta, j);
-    return cost(zeta, Control::Zero(), j, false).value + rate_weight() * e_v * e_v;
+    return cost(zeta, Control::Zero(), j, false).value + rate_term(zeta, j).value;
   }
   void running_cost_derivatives(const State& zeta, const Control& nu, int j,
                                 RunningDerivatives& d) const {
@@ -274,8 +295,9 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
   }
   void terminal_cost_derivatives(const State& zeta, int j, TerminalDerivatives& d) const {
     const TrackingCost<Scalar> c = cost(zeta, Control::Zero(), j, false);
-    d.lx << c.d_theta, Scalar(2) * rate_weight() * rate_error(zeta, j);
-    d.lxx << c.d_theta_theta, Scalar(0), Scalar(0), Scalar(2) * rate_weight();
+    const TerminalRateTerm<Scalar> r = rate_term(zeta, j);
+    d.lx << c.d_theta, r.d_rate;
+    d.lxx << c.d_theta_theta, Scalar(0), Scalar(0), r.d_rate_rate;
   }
 
   // The composed motor input stays within -5..5 V.
@@ -289,9 +311,9 @@ class ForearmFastSubsystem : public ProblemBase<ForearmFastSubsystem<Scalar, NFa
                       offset_free_.enabled ? offset_free_.disturbance : Scalar(0));
   }
   Scalar time(int j) const { return start_time_ + Scalar(j) * h_; }
-  Scalar rate_weight() const { return w_.w_theta * terminal_rate_time_ * terminal_rate_time_; }
-  Scalar rate_error(const State& zeta, int j) const {
-    return zeta(1) + theta_dot_hat_[j] - target_->rate(time(j));
+  TerminalRateTerm<Scalar> rate_term(const State& zeta, int j) const {
+    return terminal_rate_term(w_, terminal_rate_time_, zeta(1) + theta_dot_hat_[j],
+                              target_->rate(time(j)));
   }
   TrackingCost<Scalar> cost(const State& zeta, const Control& nu, int j, bool running) const {
     const Scalar theta_d = target_->angle(time(j));
