@@ -561,7 +561,8 @@ TEST(ForearmBoard, TerminalRateTermLowersTheTwoStagesErrorAt1_8Hz) {
   double rms[2];
   for (int with_term = 0; with_term < 2; ++with_term) {
     Board::Config config = Rig::config();
-    if (with_term) config.second_stage_terminal_rate_time = hmpc::forearm::kTwoStageTerminalRateTime;
+    if (with_term)
+      config.second_stage_terminal_rate_time = hmpc::forearm::kTwoStageTerminalRateTime;
     Rig rig(0.0, nullptr, config);
     rig.run(20);
     rig.command(RequestedMode::kHold);

@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
   if (options.emulate_cortex_m7) config.emulated_target = &hmpc::forearm::kCortexM7ComputeModel;
   if (options.w_v > 0) config.weights.w_v = options.w_v;
   config.offset_free = options.offset_free;
-  if (options.terminal_rate) config.second_stage_terminal_rate_time = hmpc::forearm::kTwoStageTerminalRateTime;
+  if (options.terminal_rate)
+    config.second_stage_terminal_rate_time = hmpc::forearm::kTwoStageTerminalRateTime;
   config.solver_failure_from_tick = std::uint32_t(std::lround(options.fail_solver_at_s * 1e3));
   // Lock-step has no deadline: the simulator, not this machine, decides how long a solve takes.
   static Board board(config, options.board.lockstep ? nullptr : &hmpc::platform::monotonic_seconds);
