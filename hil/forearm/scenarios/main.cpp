@@ -96,7 +96,8 @@ void print_usage(std::FILE* out) {
       "  --offset-free MODE  off (the thesis's MPC, default), on (the boards' offset-free MPC:\n"
       "                      a disturbance observer, its estimate in the model), or both: each\n"
       "                      strategy twice, the offset-free rows named STRATEGY_offset_free\n"
-      "  --terminal-rate MODE off (the thesis's Two-stage, default), on (its second stage with\n"
+      "  --terminal-rate MODE\n"
+      "                      off (the thesis's Two-stage, default), on (its second stage with\n"
       "                      the terminal rate term, the boards' --terminal-rate), or both: the\n"
       "                      Two-stage twice, the second named two_stage_terminal_rate\n");
 }
