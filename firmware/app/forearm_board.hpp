@@ -95,9 +95,9 @@ struct BoardConfig {
   // and run, and every strategy's model carries its estimate. Off: the thesis's method.
   bool offset_free = false;
   typename forearm::DisturbanceObserver<Scalar>::Config disturbance_observer{};
-  // The Two-stage's second-stage terminal rate term T_v [s] (ForearmFastSubsystem); 0: the
-  // thesis's cost.
-  Scalar second_stage_terminal_rate_time = Scalar(0);
+  // The Two-stage with the terminal rate term in both stages (forearm::kTwoStageTerminalRate).
+  // Off: the thesis's cost.
+  bool two_stage_terminal_rate = false;
   // HIL lock-step only: the processor this board emulates. Each MPC step is charged the
   // compute time this model predicts from the solver's work (mpc/compute_model.hpp): its
   // output acts only that many ticks later, the previous output holding meanwhile, and no new
@@ -301,7 +301,7 @@ class ForearmBoard : public BoardRuntime<ForearmBoard<Scalar>, ForearmBoardProto
     s.parameters = config_.model;
     s.weights = config_.weights;
     s.target = &target_;
-    s.second_stage_terminal_rate_time = config_.second_stage_terminal_rate_time;
+    if (config_.two_stage_terminal_rate) s.two_stage_terminal_rate = forearm::kTwoStageTerminalRate;
     return s;
   }
 

@@ -25,6 +25,10 @@ struct ForearmMismatch {
   double mass_scale = 1, friction_scale = 1, pam_time_constant_scale = 1;
 };
 
+// The HIL demo's default: a modest mismatch, as a real arm has: a heavier forearm (a hand-held
+// load of ~5 % of its mass), more friction (a worn bearing), a slower valve.
+constexpr ForearmMismatch kDemoMismatch{1.05, 1.2, 1.1};
+
 // The plant's parameters: the model's with the mismatch applied. Throws std::invalid_argument
 // naming the field if a factor is out of range or the model's end stops are malformed.
 forearm::Parameters<double> with_mismatch(const forearm::Parameters<double>& model,

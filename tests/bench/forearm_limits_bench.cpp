@@ -14,6 +14,7 @@
 
 #include "hmpc/models/forearm_mpc.hpp"
 #include "hmpc/models/forearm_tracking_limit.hpp"
+#include "simbody_forearm.hpp"
 
 namespace {
 
@@ -23,13 +24,16 @@ constexpr int kSamples = 2500;  // 10 s at 4 ms
 constexpr double kAmplitude = 30 * M_PI / 180;
 constexpr double kDegree = 180 / M_PI;
 
+// The MPCs' model is `model`, the simulated arm `plant`.
 struct Run {
   const Parameters<double>& plant;
   S::Setup setup;
   TargetTrajectory<double> target;
-  Run(const Parameters<double>& p, double frequency_hz) : plant(p) {
+  Run(const Parameters<double>& model, double frequency_hz) : Run(model, model, frequency_hz) {}
+  Run(const Parameters<double>& model, const Parameters<double>& p, double frequency_hz)
+      : plant(p) {
     target.set_sinusoid(kAmplitude, frequency_hz, 0, 0);
-    setup.parameters = p;
+    setup.parameters = model;
     setup.target = &target;
   }
   // RMS error (deg) of one strategy; the MPC is built on the heap (the Fine ones are large).
@@ -42,17 +46,16 @@ struct Run {
                .rms_error *
            kDegree;
   }
-  S::Problem coarse_problem() const { return S::problem(setup, kCoarse20Step); }
   // The Two-stage with a second-stage horizon of NFast fine steps (Table 3.1's is 20, 80 ms)
-  // and a terminal rate term of T_v seconds (0: the thesis's cost).
+  // and the terminal rate term's T_v in its stages (0: the thesis's cost).
   template <int NFast>
-  double two_stage(double terminal_rate_time = 0) const {
+  double two_stage(TwoStageTerminalRate rate = {}) const {
     using Fast = ForearmFastSubsystem<double, NFast>;
     using Mpc = hmpc::CoarseFastMpc<S::Problem, kCoarse20Horizon, Fast, NFast>;
     Fast fast(setup.parameters, setup.weights, kTwoStageFineStep, setup.target);
-    fast.set_terminal_rate_time(terminal_rate_time);
+    fast.set_terminal_rate_time(rate.second_stage);
     return rms(std::make_unique<Mpc>(
-        coarse_problem(), fast,
+        S::problem(setup, kCoarse20Step, rate.first_stage), fast,
         typename Mpc::Config{kTwoStageFineStepsPerCoarseStep, S::samples_per_step(kCoarse20Step),
                              solver_config<double>(), solver_config<double>()}));
   }
@@ -61,7 +64,7 @@ struct Run {
   double coarse20() const {
     using Mpc = hmpc::RecedingHorizonMpc<S::Problem, N>;
     return rms(std::make_unique<Mpc>(
-        coarse_problem(),
+        S::problem(setup, kCoarse20Step, 0),
         typename Mpc::Config{S::samples_per_step(kCoarse20Step), solver_config<double>()}));
   }
   double strategy(Strategy s) const {
@@ -130,20 +133,39 @@ int main() {
   }
 
   std::printf(
-      "\nThe Two-stage's second stage with a terminal rate term w_theta T_v^2 (theta' - "
-      "theta_d')^2 (ForearmFastSubsystem; T_v = 0 is the thesis's cost). RMS error (deg), and "
-      "over the best other strategy of the first table\n\n"
-      "| f (Hz) | T_v 0 | 0.1 s | 0.2 s | 0.4 s | 0.8 s | T_v %.1f s / best other |\n"
-      "|---|---|---|---|---|---|---|\n",
-      kTwoStageTerminalRateTime);
+      "\nThe terminal rate term w_theta T_v^2 (theta' - theta_d')^2 beside Eq. 3.3b (T_v = 0: the "
+      "thesis's cost). The Two-stage with it in its second stage, then also in its first "
+      "stage (second stage %.1f s), on the model and on the model with the HIL demo's "
+      "mismatch (mass x%g, friction x%g, valve x%g). RMS error (deg), and the Two-stage with "
+      "T_v %.2f s / %.1f s over the best other strategy as the thesis has it\n\n"
+      "| plant | f (Hz) | second 0 | 0.1 | 0.2 | 0.4 | 0.8 s | first 0.05 | 0.1 | 0.15 s | "
+      "chosen / best other |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|\n",
+      kTwoStageTerminalRate.second_stage, hmpc::hil::kDemoMismatch.mass_scale,
+      hmpc::hil::kDemoMismatch.friction_scale, hmpc::hil::kDemoMismatch.pam_time_constant_scale,
+      kTwoStageTerminalRate.first_stage, kTwoStageTerminalRate.second_stage);
   double rate_term_over_best_at_1_8 = 0;
-  for (int i = 0; frequencies[i] <= 1.8; ++i) {
-    const Run run(model, frequencies[i]);
-    std::printf("| %.2f |", frequencies[i]);
-    for (double t_v : {0.0, 0.1, 0.2, 0.4, 0.8}) std::printf(" %.2f |", run.two_stage<20>(t_v));
-    const double ratio = run.two_stage<20>(kTwoStageTerminalRateTime) / best_others[i];
-    if (frequencies[i] == 1.8) rate_term_over_best_at_1_8 = ratio;
-    std::printf(" %.2f |\n", ratio);
+  const Parameters<double> mismatched = hmpc::hil::with_mismatch(model, hmpc::hil::kDemoMismatch);
+  for (const Parameters<double>* plant : {&model, &mismatched}) {
+    for (int i = 0; frequencies[i] <= 1.8; ++i) {
+      const Run run(model, *plant, frequencies[i]);
+      double best = best_others[i];
+      if (plant == &mismatched) {
+        std::vector<double> rms;
+        for (Strategy s : kAllStrategies)
+          rms.push_back(s == Strategy::kPamOnly || s == Strategy::kTwoStage ? 0.0
+                                                                            : run.strategy(s));
+        best = best_other(rms);
+      }
+      std::printf("| %s | %.2f |", plant == &model ? "model" : "mismatched", frequencies[i]);
+      for (double t_v : {0.0, 0.1, 0.2, 0.4, 0.8})
+        std::printf(" %.2f |", run.two_stage<20>({0, t_v}));
+      for (double t_v : {0.05, 0.1, 0.15})
+        std::printf(" %.2f |", run.two_stage<20>({t_v, kTwoStageTerminalRate.second_stage}));
+      const double ratio = run.two_stage<20>(kTwoStageTerminalRate) / best;
+      if (plant == &model && frequencies[i] == 1.8) rate_term_over_best_at_1_8 = ratio;
+      std::printf(" %.2f |\n", ratio);
+    }
   }
 
   std::printf(
@@ -153,12 +175,12 @@ int main() {
       "| f (Hz) | T_v (s) | Fine 4 ms | Fine 8 ms | Coarse 20 ms | Coarse 40 ms | Two-stage | "
       "Two-stage / best other |\n"
       "|---|---|---|---|---|---|---|---|\n",
-      kTwoStageTerminalRateTime);
+      kTwoStageTerminalRate.second_stage);
   for (int i = 0; frequencies[i] <= 1.8; ++i) {
     Run run(model, frequencies[i]);
-    run.setup.second_stage_terminal_rate_time = kTwoStageTerminalRateTime;
     for (double t_v : {0.1, 0.2}) {
       run.setup.terminal_rate_time = t_v;
+      run.setup.two_stage_terminal_rate = {t_v, kTwoStageTerminalRate.second_stage};
       std::vector<double> rms;
       for (Strategy s : kAllStrategies)
         rms.push_back(s == Strategy::kPamOnly ? 0.0 : run.strategy(s));
@@ -183,8 +205,8 @@ int main() {
   }
 
   std::printf("\ntwo-stage / best other at 1.8 Hz: RMS %.2fx\n", two_stage_over_best_at_1_8);
-  std::printf("two-stage with T_v %.1f s / best other at 1.8 Hz: RMS %.2fx\n",
-              kTwoStageTerminalRateTime, rate_term_over_best_at_1_8);
+  std::printf("two-stage with the terminal rate term / best other at 1.8 Hz: RMS %.2fx\n",
+              rate_term_over_best_at_1_8);
   std::printf("coarse-20ms 400 ms / 200 ms horizon at 1.8 Hz: RMS %.2fx\n",
               coarse_400_over_200_at_1_8);
   return 0;

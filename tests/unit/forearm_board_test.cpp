@@ -553,16 +553,15 @@ TEST(ForearmBoard, OffsetFreeMpcTracksSinusoidsOnMismatchedPlants) {
   }
 }
 
-// The board's Two-stage with its second stage's terminal rate term (the board's
-// --terminal-rate) on the thesis's +-30 deg at 1.8 Hz, RMS over 3 s after the first second, on
-// the model's plant: the term reaches the board's MPC and lowers the error the thesis's 80 ms
-// second stage leaves where the target outruns the valve.
+// The board's Two-stage with the terminal rate term (the board's --terminal-rate) on the
+// thesis's +-30 deg at 1.8 Hz, RMS over 3 s after the first second, on the model's plant: the
+// term reaches the board's MPC and lowers the error the thesis's cost leaves where the target
+// outruns the valve.
 TEST(ForearmBoard, TerminalRateTermLowersTheTwoStagesErrorAt1_8Hz) {
   double rms[2];
   for (int with_term = 0; with_term < 2; ++with_term) {
     Board::Config config = Rig::config();
-    if (with_term)
-      config.second_stage_terminal_rate_time = hmpc::forearm::kTwoStageTerminalRateTime;
+    config.two_stage_terminal_rate = with_term == 1;
     Rig rig(0.0, nullptr, config);
     rig.run(20);
     rig.command(RequestedMode::kHold);

@@ -202,7 +202,7 @@ TEST_F(Fixture, FastSubsystemDerivativesMatchFiniteDifferences) {
     EXPECT_LT((d.lx - g).norm(), 1e-4 * (1 + g.norm()));
     // The terminal cost, with the terminal rate term on every other sample: squares of affine
     // functions of zeta (the pressure is frozen), so its Hessian is exact too.
-    fast.set_terminal_rate_time(i % 2 == 0 ? kTwoStageTerminalRateTime : 0.0);
+    fast.set_terminal_rate_time(i % 2 == 0 ? kTwoStageTerminalRate.second_stage : 0.0);
     Fast::TerminalDerivatives t;
     fast.terminal_cost_derivatives(zeta, kTwoStageFineHorizon, t);
     Eigen::Matrix2d h;

@@ -71,8 +71,7 @@ int main(int argc, char** argv) {
   if (options.emulate_cortex_m7) config.emulated_target = &hmpc::forearm::kCortexM7ComputeModel;
   if (options.w_v > 0) config.weights.w_v = options.w_v;
   config.offset_free = options.offset_free;
-  if (options.terminal_rate)
-    config.second_stage_terminal_rate_time = hmpc::forearm::kTwoStageTerminalRateTime;
+  config.two_stage_terminal_rate = options.terminal_rate;
   config.solver_failure_from_tick = std::uint32_t(std::lround(options.fail_solver_at_s * 1e3));
   // Lock-step has no deadline: the simulator, not this machine, decides how long a solve takes.
   static Board board(config, options.board.lockstep ? nullptr : &hmpc::platform::monotonic_seconds);
@@ -92,7 +91,7 @@ int main(int argc, char** argv) {
             "max_wakeup_latency_ms=%.3f "
             "heap_allocations_in_loop=%llu safe_outputs_sent=%d heartbeat_timeout_ticks=%d "
             "sensor_timeout_ticks=%d cost_weight_updates=%u w_theta=%g w_p=%g w_tau=%g w_v=%g "
-            "offset_free=%d disturbance_estimate_nm=%.4f second_stage_terminal_rate_s=%g\n",
+            "offset_free=%d disturbance_estimate_nm=%.4f two_stage_terminal_rate=%d\n",
             kProgram, static_cast<unsigned long long>(stats.ticks), r.elapsed_s,
             r.elapsed_s > 0 ? double(stats.ticks) / r.elapsed_s : 0.0,
             proto::value_name(proto::kBoardModeValues, std::uint32_t(board.mode())),
@@ -107,6 +106,6 @@ int main(int argc, char** argv) {
             double(board.config().weights.w_theta), double(board.config().weights.w_P),
             double(board.config().weights.w_tau), double(board.config().weights.w_v),
             board.config().offset_free ? 1 : 0, double(board.disturbance_estimate()),
-            double(board.config().second_stage_terminal_rate_time));
+            board.config().two_stage_terminal_rate ? 1 : 0);
       });
 }

@@ -17,7 +17,7 @@ struct Options {
   double w_v = 0;                  // voltage weight of Eq. 3.3; 0: the thesis's (CostWeights)
   double fail_solver_at_s = 0;     // test hook (BoardConfig::solver_failure_from_tick); 0: never
   bool offset_free = false;        // BoardConfig::offset_free
-  bool terminal_rate = false;      // the Two-stage's second stage: T_v kTwoStageTerminalRateTime
+  bool terminal_rate = false;      // BoardConfig::two_stage_terminal_rate
 };
 
 inline void print_usage(std::FILE* out) {
@@ -40,16 +40,17 @@ inline void print_usage(std::FILE* out) {
       "  --offset-free       offset-free MPC: a disturbance observer on the joint, its estimate\n"
       "                      in every strategy's model, the torque penalty counted beyond the\n"
       "                      holding torque (default: the thesis's Eq. 3.1 and 3.3)\n"
-      "  --terminal-rate     the Two-stage's second stage also prices the joint rate's error\n"
-      "                      at its horizon's end, w_theta T_v^2 (theta' - theta_d')^2 with\n"
-      "                      T_v %g s (default: the thesis's Eq. 3.3b)\n"
+      "  --terminal-rate     the Two-stage also prices the joint rate's error where each\n"
+      "                      stage's horizon ends, w_theta T_v^2 (theta' - theta_d')^2, T_v %g s\n"
+      "                      in the first stage and %g s in the second (default: the thesis's\n"
+      "                      Eq. 3.3b)\n"
       "  --fail-solver-at SECONDS\n"
       "                      test hook for fault tests: every MPC step from this board time on\n"
       "                      ends in a numerical failure\n"
       "On exit the board commands safe outputs (valve vented, motor off). Exit status: 0 on\n"
       "SIGINT, SIGTERM or the end of --duration; 1 when the interface or the log cannot be\n"
       "used; 2 for bad arguments.\n",
-      forearm::kTwoStageTerminalRateTime);
+      forearm::kTwoStageTerminalRate.first_stage, forearm::kTwoStageTerminalRate.second_stage);
 }
 
 using cli::ParseOutcome;

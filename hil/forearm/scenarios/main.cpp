@@ -37,9 +37,6 @@ using hmpc::hil::HilRunSpec;
 constexpr const char* kProgram = "hmpc-forearm-hil";
 // The thesis's weights of Fig. 3.4.
 constexpr double kSweepWeights[] = {0.02, 0.002, 0.0002};
-// The default run has a modest plant-model mismatch, as a real arm has: a heavier forearm
-// (a hand-held load of ~5 % of its mass), more friction (a worn bearing), a slower valve.
-constexpr hmpc::hil::ForearmMismatch kDefaultMismatch{1.05, 1.2, 1.1};
 
 struct Options {
   std::string out;
@@ -51,7 +48,7 @@ struct Options {
   double duration_s = 10;
   double noise = 1;
   hmpc::trajectory::TargetSpec target{};  // frequency_hz: each of `frequencies` in turn
-  hmpc::hil::ForearmMismatch mismatch = kDefaultMismatch;
+  hmpc::hil::ForearmMismatch mismatch = hmpc::hil::kDemoMismatch;
   bool weight_sweep = false;
   // Each strategy as the thesis has it, offset-free (the board's --offset-free), or both.
   std::vector<bool> offset_free{false};
