@@ -2,8 +2,8 @@
 // model (RK4 plant at 1 ms, each update's input delayed by its compute time on the Cortex-M7)
 // tracking +-30 deg sinusoids from 0.25 to 2.5 Hz for 10 s, beside the actuators' first-harmonic
 // limit (forearm_tracking_limit.hpp); then the same runs with the horizons changed (the
-// Two-stage's second stage, Coarse 20 ms's whole horizon), with the second stage's terminal
-// rate term, and with a faster valve. A study, not
+// Two-stage's second stage, Coarse 20 ms's whole horizon), with the terminal rate term in the
+// Two-stage's stages and in every strategy, and with a faster valve. A study, not
 // a timing: every figure is an RMS tracking error in degrees, and the ratios compare strategies
 // of the same run.
 #include <algorithm>

@@ -52,8 +52,8 @@ struct Options {
   bool weight_sweep = false;
   // Each strategy as the thesis has it, offset-free (the board's --offset-free), or both.
   std::vector<bool> offset_free{false};
-  // The Two-stage as the thesis has it, with the second stage's terminal rate term (the board's
-  // --terminal-rate), or both.
+  // The Two-stage as the thesis has it, with the terminal rate term in both its stages (the
+  // board's --terminal-rate), or both.
   std::vector<bool> terminal_rate{false};
   long jobs = 1;
 };
@@ -94,8 +94,8 @@ void print_usage(std::FILE* out) {
       "                      a disturbance observer, its estimate in the model), or both: each\n"
       "                      strategy twice, the offset-free rows named STRATEGY_offset_free\n"
       "  --terminal-rate MODE\n"
-      "                      off (the thesis's Two-stage, default), on (its second stage with\n"
-      "                      the terminal rate term, the boards' --terminal-rate), or both: the\n"
+      "                      off (the thesis's Two-stage, default), on (its stages with the\n"
+      "                      terminal rate term, the boards' --terminal-rate), or both: the\n"
       "                      Two-stage twice, the second named two_stage_terminal_rate\n");
 }
 
