@@ -25,7 +25,7 @@ inline HilRunSpec spec(forearm_protocol::Strategy strategy, const std::string& n
   s.target.frequency_hz = 1.0;
   s.noise_scale = 1;
   s.seed = 1;
-  s.mismatch = {1.05, 1.2, 1.1};  // as the demo's default (hmpc-forearm-hil)
+  s.mismatch = kDemoMismatch;
   s.directory = work_dir() + "/" + name;
   return s;
 }

@@ -148,7 +148,7 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
   void set_offset_free(const OffsetFree<Scalar>& o) { offset_free_ = o; }
   const OffsetFree<Scalar>& offset_free() const { return offset_free_; }
   void set_terminal_rate_time(Scalar t_v) { terminal_rate_time_ = t_v; }
-  Scalar target_angle(int k) const { return target_->angle(start_time_ + Scalar(k) * h_); }
+  Scalar target_angle(int k) const { return target_->angle(time(k)); }
 
   State dynamics(const State& x, const Control& u, int) const {
     const JointStep<Scalar> s = joint_step(p_, h_, x(0), x(1), x(2), u(0), disturbance());
@@ -204,9 +204,9 @@ class ForearmProblem : public ProblemBase<ForearmProblem<Scalar>, Scalar, 3, 2> 
 
  private:
   Scalar disturbance() const { return offset_free_.enabled ? offset_free_.disturbance : Scalar(0); }
+  Scalar time(int k) const { return start_time_ + Scalar(k) * h_; }
   TerminalRateTerm<Scalar> rate_term(const State& x, int k) const {
-    return terminal_rate_term(w_, terminal_rate_time_, x(1),
-                              target_->rate(start_time_ + Scalar(k) * h_));
+    return terminal_rate_term(w_, terminal_rate_time_, x(1), target_->rate(time(k)));
   }
 
   Parameters<Scalar> p_;
