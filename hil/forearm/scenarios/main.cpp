@@ -481,8 +481,10 @@ bool plot(const std::string& out, const std::vector<Row>& rows, const Options& o
       gp << (s ? ", " : "") << "'" << out << "/" << file << "' using ((";
       for (std::size_t i = 0; i < o.frequencies.size(); ++i)
         gp << "abs($2-" << o.frequencies[i] << ")<1e-9?" << i << ":";
-      gp << "-9)+" << shift << "):(strcol(1) eq '" << n << "' ? $3 : 1/0):(0.06) with boxes title '"
-         << n << "', '' using ((";
+      // A line type per variant: the error bars between boxes would otherwise take every other
+      // one, and colours would repeat from the fifth variant on.
+      gp << "-9)+" << shift << "):(strcol(1) eq '" << n << "' ? $3 : 1/0):(0.06) with boxes lt "
+         << s + 1 << " title '" << n << "', '' using ((";
       for (std::size_t i = 0; i < o.frequencies.size(); ++i)
         gp << "abs($2-" << o.frequencies[i] << ")<1e-9?" << i << ":";
       gp << "-9)+" << shift << "):(strcol(1) eq '" << n
