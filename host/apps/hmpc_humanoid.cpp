@@ -74,6 +74,11 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
       s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated, s.overruns, s.unusable,
       run.samples.size());
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
+  if (config.mpc == MpcKind::kCoarseFast) {
+    std::printf("lower layer changed an applied torque by over %.0f %% of its limit in %d of %d "
+                "samples\n",
+                kLowerLayerActs * 100.0, s.lower_layer_acted, s.samples);
+  }
   if (run.fell()) {
     std::printf("the robot FELL at %.2f s (head, hips or a knee within %.2f m of the ground)\n",
                 run.fell_at, config.fallen_clearance);
@@ -166,6 +171,19 @@ int main(int argc, char** argv) {
   int seed = 1;
   parser.integer("--sensor-seed", 0, 2147483647, seed);
   parser.integer("--iteration-cap", 1, 1000, config.iteration_cap);
+  parser.text("--fast-dynamics", [&](const std::string& v) {
+    const std::pair<const char*, FastDynamics> names[] = {
+        {"base-held", FastDynamics::kBaseHeld},
+        {"base-accelerated", FastDynamics::kBaseAcceleratedAsPlanned},
+        {"whole-body", FastDynamics::kWholeBody}};
+    for (const auto& [name, value] : names) {
+      if (v == name) {
+        config.problem.fast_dynamics = value;
+        return std::string();
+      }
+    }
+    return hmpc::cli::bad_value("--fast-dynamics", "base-held, base-accelerated or whole-body", v);
+  });
   parser.number("--model-slip-velocity", 0.001, 1.0, "m/s in 0.001..1",
                 config.problem.model_slip_velocity);
   parser.flag("--no-warm-start", no_warm_start);

@@ -16,7 +16,8 @@
 //     closest approach and when it came within 5 cm (the thesis's reaching time: 1.66 s);
 //     before that, with T > 1, the line search's rollouts one at a time against two at once
 //     (hmpc/solver/problem.hpp's rollout lanes) on motion V; after it, Fig. 2.10's cost
-//     comparison (warm-started, untruncated) repeated from five perturbed starts; last,
+//     comparison (warm-started, untruncated) repeated from five perturbed starts, with the
+//     samples where Coarse-Fast's lower layer changed an applied torque (kLowerLayerActs); last,
 //     Coarse-Fast truncated, warm-started, run four times per motion (real-time outcomes vary
 //     with timing): checks passed and samples over 30 ms;
 //   - with --check-starts K [--motion NAME] [--model-slip-velocity V]: each motion's physical
@@ -309,13 +310,13 @@ void cost_over_starts(const std::vector<std::string>& motions, const AtRest& at_
       "forward, back, "
       "left, right); cost/Fine: median over the starts where both stood\n",
       starts().size());
-  std::printf("%-18s %12s %12s %12s %12s %s\n", "motion", "Coarse/Fine", "CF/Fine", "falls F/C/CF",
-              "CF <= Coarse", "cost/Fine per start (Coarse, CF)");
-  int motions_below = 0;
+  std::printf("%-18s %12s %12s %12s %12s %13s %s\n", "motion", "Coarse/Fine", "CF/Fine",
+              "falls F/C/CF", "CF <= Coarse", "lower acted", "cost/Fine per start (Coarse, CF)");
+  int motions_below = 0, motions_acting = 0, acted_all = 0, samples_all = 0;
   for (const std::string& file : motions) {
     const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
     std::vector<double> ratio[kMpcKinds];
-    int falls[kMpcKinds] = {0, 0, 0}, no_worse_than_coarse = 0;
+    int falls[kMpcKinds] = {0, 0, 0}, no_worse_than_coarse = 0, acted = 0, samples = 0;
     std::string per_start;
     for (const Start& start : starts()) {
       std::array<RunResult, kMpcKinds> r;
@@ -344,6 +345,9 @@ void cost_over_starts(const std::vector<std::string>& motions, const AtRest& at_
         if (value > 0.0) ratio[static_cast<int>(kind)].push_back(value);
         shown[kind == MpcKind::kCoarse ? 0 : 1] = value;
       }
+      const ClosedLoopSummary& coarse_fast = r[static_cast<int>(MpcKind::kCoarseFast)].summary;
+      acted += coarse_fast.lower_layer_acted;
+      samples += coarse_fast.samples;
       const bool ok = no_worse(r[static_cast<int>(MpcKind::kCoarseFast)],
                                r[static_cast<int>(MpcKind::kCoarse)]);
       no_worse_than_coarse += ok ? 1 : 0;
@@ -353,17 +357,26 @@ void cost_over_starts(const std::vector<std::string>& motions, const AtRest& at_
     }
     char falls_text[32];
     std::snprintf(falls_text, sizeof falls_text, "%d/%d/%d", falls[0], falls[1], falls[2]);
-    std::printf("%-18s %12.3f %12.3f %12s %9d of %zu%s\n", file.c_str(),
+    char acted_text[32];
+    std::snprintf(acted_text, sizeof acted_text, "%d/%d", acted, samples);
+    std::printf("%-18s %12.3f %12.3f %12s %9d of %zu %13s%s\n", file.c_str(),
                 median(ratio[static_cast<int>(MpcKind::kCoarse)]),
                 median(ratio[static_cast<int>(MpcKind::kCoarseFast)]), falls_text,
-                no_worse_than_coarse, starts().size(), per_start.c_str());
+                no_worse_than_coarse, starts().size(), acted_text, per_start.c_str());
     motions_below += 2 * no_worse_than_coarse > static_cast<int>(starts().size()) ? 1 : 0;
+    motions_acting += 2 * acted >= samples ? 1 : 0;
+    acted_all += acted;
+    samples_all += samples;
   }
   std::printf(
       "(0.00: a run fell; !: Coarse-Fast worse than Coarse on that start, a fall counting as "
       "worse)\n"
-      "Coarse-Fast at or below Coarse on most starts: %d of %zu motions\n",
-      motions_below, motions.size());
+      "Coarse-Fast at or below Coarse on most starts: %d of %zu motions\n"
+      "lower acted: Coarse-Fast's samples where the lower layer changed an applied torque by over "
+      "%.0f %% of its limit, over the starts; on at least half of them in %d of %zu motions (%d of "
+      "%d samples in all)\n",
+      motions_below, motions.size(), kLowerLayerActs * 100.0, motions_acting, motions.size(),
+      acted_all, samples_all);
 }
 
 void usage(std::FILE* out) {

@@ -86,6 +86,18 @@ TEST(HumanoidClosedLoop, SummaryCountsSolvesOverThePeriod) {
   EXPECT_DOUBLE_EQ(s.median_solve_ms, 29.0);
 }
 
+// The lower layer counts as acting on a sample where it changed an applied torque by more than
+// kLowerLayerActs of the joint's limit.
+TEST(HumanoidClosedLoop, SummaryCountsTheSamplesWhereTheLowerLayerActed) {
+  ClosedLoopRun run;
+  for (const double change : {0.0, 0.005, 0.0101, 0.3, 0.01}) {
+    ClosedLoopSample s = sample(0.03 * (run.samples.size() + 1), 0.85, 230.0, 230.0);
+    s.lower_layer_change = change;
+    run.samples.push_back(s);
+  }
+  EXPECT_EQ(summarise(run).lower_layer_acted, 2);
+}
+
 TEST(HumanoidPhysicalChecks, JumpNeedsAFlightAndAnUprightLanding) {
   const Motion m = motion("V-low-jump");
   ClosedLoopRun run;

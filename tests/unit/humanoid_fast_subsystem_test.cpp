@@ -156,6 +156,9 @@ TEST(HumanoidFastSubsystem, CoarseFastUpdateGivesAUsablePlanWithinTheLimits) {
     const JointVector u = mpc->planned_control(j);
     EXPECT_TRUE(u.allFinite());
     EXPECT_TRUE((u.cwiseAbs().array() <= model.torque_limit.array() + 1e-9).all()) << "step " << j;
+    // Eq. 2.36: the plan is the upper input held on the fine grid plus the lower layer's nu,
+    // which the closed loop's lower-layer figure reads as planned minus held.
+    EXPECT_EQ(mpc->planned_control(j) - mpc->held_control(j), mpc->fast_solver().controls()[j]);
   }
 }
 

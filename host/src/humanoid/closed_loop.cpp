@@ -107,6 +107,7 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
     s.unusable += sample.plan_usable ? 0 : 1;
     s.overruns += sample.solve_seconds > kSamplingPeriod ? 1 : 0;
     s.total_cost += sample.cost;
+    s.lower_layer_acted += sample.lower_layer_change > kLowerLayerActs ? 1 : 0;
     s.min_height = std::min(s.min_height, sample.base.position.z());
     s.max_height = std::max(s.max_height, sample.base.position.z());
   }

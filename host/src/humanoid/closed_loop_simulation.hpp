@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -58,6 +59,24 @@ int fast_iterations_of(const Mpc&) {
 template <int A>
 int fast_iterations_of(const BasicCoarseFast<A>& mpc) {
   return mpc.last_fast_result().iterations;
+}
+// Coarse-Fast's lower-layer correction in the period's applied inputs: the largest |nu| of
+// Eq. 2.36 over its fine steps 0..steps-1 and the joints, as a fraction of the joint's torque
+// limit; 0 for a single-layer MPC.
+template <class Mpc, class Limit>
+double lower_layer_change_of(const Mpc&, const Limit&, int) {
+  return 0.0;
+}
+template <int A, class Limit>
+double lower_layer_change_of(const BasicCoarseFast<A>& mpc, const Limit& limit, int steps) {
+  double change = 0.0;
+  for (int j = 0; j < steps; ++j) {
+    change = std::max(change, (mpc.planned_control(j) - mpc.held_control(j))
+                                  .cwiseAbs()
+                                  .cwiseQuotient(limit)
+                                  .maxCoeff());
+  }
+  return change;
 }
 template <class Mpc>
 bool stopped_early(const Mpc& mpc) {
@@ -299,6 +318,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
     sample.state = x;
     sample.iterations = iterations_of(mpc);
     sample.fast_iterations = fast_iterations_of(mpc);
+    sample.lower_layer_change = lower_layer_change_of(mpc, model.torque_limit, kFineSteps);
     sample.plan_usable = mpc.last_plan_usable();
     if (finite(x)) sample.base = observer.features(x);
     run.samples.push_back(sample);

@@ -150,6 +150,11 @@ class TwoLayerMpc {
     return u;
   }
 
+  // Eq. 2.35: the upper input held at fine step j (0 <= j < N_f), before the lower layer's nu.
+  const FullControl& held_control(int j) const {
+    return held_controls_[j < 0 ? 0 : (j >= NFast ? NFast - 1 : j)];
+  }
+
   // Line 6, Eq. 2.36: composed input at fine step j of the current plan (0 <= j < N_f).
   // If the fast layer failed, the held upper input is used unmodified.
   FullControl planned_control(int j) const {

@@ -112,6 +112,10 @@ struct BasicClosedLoopSample {
   double solve_seconds = 0.0;  // wall clock of the MPC update that started the period
   int iterations = 0;          // the (upper) layer's
   int fast_iterations = 0;     // Coarse-Fast's lower layer's
+  // Coarse-Fast: how much the lower layer changed the applied inputs, the largest |nu| (Eq.
+  // 2.36) over the period's fine steps and the joints, as a fraction of the joint's torque
+  // limit; 0 for the single-layer MPCs.
+  double lower_layer_change = 0.0;
   bool plan_usable = false;
   bool truncated = false;  // the solve was stopped at the sampling time
   // What the MPC solved from at the period's start (the state itself with StateFeedback::kTruth)
@@ -152,6 +156,10 @@ using ArmClosedLoopRun = BasicClosedLoopRun<1>;
 template <int A = 0>
 BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConfig& config);
 
+// A lower-layer correction that counts as acting: 1 % of the joint's torque limit (1 N m on the
+// ankles' 100 N m). Our threshold; smaller corrections barely move a 1 ms simulator step.
+constexpr double kLowerLayerActs = 0.01;
+
 // Summary figures of a run.
 struct ClosedLoopSummary {
   double max_solve_ms = 0.0, median_solve_ms = 0.0;
@@ -159,6 +167,9 @@ struct ClosedLoopSummary {
   int truncated = 0, unusable = 0;
   int overruns = 0;  // solves that took longer than the 30 ms sampling period
   int samples = 0;
+  // Samples where the lower layer changed an applied input by more than kLowerLayerActs of its
+  // joint's torque limit.
+  int lower_layer_acted = 0;
   double total_cost = 0.0;
   double min_height = 0.0, max_height = 0.0;
 };
