@@ -231,6 +231,53 @@ TEST(HumanoidClosedLoop, RejectsBadConfigurations) {
   EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
   config.initial_velocity = Eigen::Vector3d(0.0, 1.5, 0.0);
   EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+  config.initial_velocity.setZero();
+  // Timings whose steps do not nest: 12 ms is no whole number of 7 ms lower steps, 6.5 ms no
+  // whole number of 1 ms simulator steps; and the Fine MPC's 10 ms steps in a 12 ms period.
+  for (const CoarseFastTiming timing :
+       {CoarseFastTiming{0.012, 0.007}, CoarseFastTiming{0.013, 0.0065},
+        CoarseFastTiming{0.006, 0.012}, CoarseFastTiming{NAN, 0.006}}) {
+    config.timing = timing;
+    EXPECT_FALSE(timing.valid());
+    EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+  }
+  config.timing = kRealRobotTiming;
+  config.mpc = MpcKind::kFine;
+  EXPECT_THROW(run_closed_loop(m, config), std::invalid_argument);
+}
+
+// The real robot's timing (Sec. 2.7.3): one Coarse-Fast solve every 12 ms, its upper layer in
+// 12 ms steps and its lower layer in two 6 ms steps per sample, holds motion I's stance as Table
+// 2.4's does (the same band and loads as CoarseFastStandsFiveSeconds), cold-started as the
+// thesis ran it.
+TEST(HumanoidClosedLoop, CoarseFastStandsInTheRealRobotsTiming) {
+  EXPECT_TRUE(kRealRobotTiming.valid());
+  EXPECT_EQ(kRealRobotTiming.fine_steps_per_upper_step(), 2);
+  EXPECT_EQ(kSimulationTiming.fine_steps_per_upper_step(), kFineStepsPerCoarseStep);
+  const Motion m = motion("I-standing");
+  const auto mpc = make_coarse_fast(m, standing_state(ProblemConfig{}, m.phases[0].height), nullptr,
+                                    ProblemConfig{}, 0, kRealRobotTiming);
+  EXPECT_EQ(mpc->upper_problem().config().step, 0.012);
+  EXPECT_EQ(mpc->fast_subsystem().config().step, 0.006);
+  ClosedLoopConfig config;
+  config.timing = kRealRobotTiming;
+  config.warm_start = false;
+  config.truncate = false;
+  config.duration = 1.2;
+  const ClosedLoopRun r = run_closed_loop(m, config);
+  ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
+  ASSERT_EQ(r.samples.size(), 100u);
+  EXPECT_EQ(r.sampling_period, 0.012);
+  const double weight = 47.0 * 9.81;
+  for (std::size_t k = 0; k < r.samples.size(); ++k) {
+    const ClosedLoopSample& s = r.samples[k];
+    ASSERT_NEAR(s.time, 0.012 * static_cast<double>(k + 1), 1e-12);
+    ASSERT_NEAR(s.base.position.z(), 0.85, 0.05) << "t = " << s.time;
+    ASSERT_LT(s.base.quaternion.tail<3>().norm(), 0.05) << "t = " << s.time;
+    ASSERT_GT(s.left_force, 0.2 * weight) << "t = " << s.time;
+    ASSERT_GT(s.right_force, 0.2 * weight) << "t = " << s.time;
+  }
+  EXPECT_TRUE(check_motion("I", m, r).passed);
 }
 
 // The MPC's model may widen the friction's slip velocity (ProblemConfig::model_slip_velocity);

@@ -51,6 +51,15 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   if (config.threads < 1 || config.threads > 64) {
     throw std::invalid_argument("closed loop: threads must be in 1..64");
   }
+  if (!config.timing.valid()) {
+    throw std::invalid_argument(
+        "closed loop: the sampling period must be a whole number of lower-layer steps, each a "
+        "whole number of 1 ms simulator steps, at most 1 s");
+  }
+  if (config.mpc == MpcKind::kFine && (config.timing.upper_step != kSimulationTiming.upper_step ||
+                                       config.timing.fast_step != kSimulationTiming.fast_step)) {
+    throw std::invalid_argument("closed loop: the Fine MPC runs in Table 2.4's timing only");
+  }
   if (config.iteration_cap < 0 || config.iteration_cap > 1000) {
     throw std::invalid_argument("closed loop: the iteration cap must be in 0..1000");
   }
@@ -105,7 +114,7 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
     iterations += sample.iterations;
     s.truncated += sample.truncated ? 1 : 0;
     s.unusable += sample.plan_usable ? 0 : 1;
-    s.overruns += sample.solve_seconds > kSamplingPeriod ? 1 : 0;
+    s.overruns += sample.solve_seconds > run.sampling_period ? 1 : 0;
     s.total_cost += sample.cost;
     s.lower_layer_acted += sample.lower_layer_change > kLowerLayerActs ? 1 : 0;
     s.min_height = std::min(s.min_height, sample.base.position.z());

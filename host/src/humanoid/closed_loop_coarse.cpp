@@ -6,8 +6,9 @@ namespace hmpc::humanoid::detail {
 template <int A>
 BasicClosedLoopRun<A> run_coarse(const Motion& motion, const ClosedLoopConfig& config,
                                  const BasicState<A>& initial, ThreadPool* pool, double duration) {
-  const auto mpc = make_single_layer<kCoarseHorizon, A>(motion, initial, pool, config.problem,
-                                                        kCoarseStep, config.iteration_cap);
+  const auto mpc = make_single_layer<kCoarseHorizon, A>(
+      motion, initial, pool, config.problem, config.timing.upper_step, config.iteration_cap,
+      config.timing.upper_step);
   return simulate(*mpc, motion, config, initial, duration);
 }
 

@@ -7,7 +7,8 @@ template <int A>
 BasicClosedLoopRun<A> run_coarse_fast(const Motion& motion, const ClosedLoopConfig& config,
                                       const BasicState<A>& initial, ThreadPool* pool,
                                       double duration) {
-  const auto mpc = make_coarse_fast(motion, initial, pool, config.problem, config.iteration_cap);
+  const auto mpc =
+      make_coarse_fast(motion, initial, pool, config.problem, config.iteration_cap, config.timing);
   return simulate(*mpc, motion, config, initial, duration);
 }
 

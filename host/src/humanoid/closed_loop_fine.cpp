@@ -6,8 +6,9 @@ namespace hmpc::humanoid::detail {
 template <int A>
 BasicClosedLoopRun<A> run_fine(const Motion& motion, const ClosedLoopConfig& config,
                                const BasicState<A>& initial, ThreadPool* pool, double duration) {
-  const auto mpc = make_single_layer<kFineHorizon, A>(motion, initial, pool, config.problem,
-                                                      kFineStep, config.iteration_cap);
+  const auto mpc =
+      make_single_layer<kFineHorizon, A>(motion, initial, pool, config.problem, kFineStep,
+                                         config.iteration_cap, config.timing.upper_step);
   return simulate(*mpc, motion, config, initial, duration);
 }
 

@@ -24,13 +24,13 @@ using Clock = std::chrono::steady_clock;
 template <int N, int A>
 std::unique_ptr<RecedingHorizonMpc<HumanoidProblem<N, A>, N>> make_single_layer(
     const Motion& motion, const BasicState<A>& initial, ThreadPool* pool, ProblemConfig config,
-    double step, int iteration_cap) {
+    double step, int iteration_cap, double sampling_period) {
   config = model_config(motion, config);
   config.step = step;
   typename RecedingHorizonMpc<HumanoidProblem<N, A>, N>::Config mpc;
   mpc.solver = layer_solver(motion);
   if (iteration_cap > 0) mpc.solver.max_iterations = iteration_cap;
-  mpc.steps_per_sample = static_cast<int>(std::lround(kSamplingPeriod / step));
+  mpc.steps_per_sample = static_cast<int>(std::lround(sampling_period / step));
   return std::make_unique<RecedingHorizonMpc<HumanoidProblem<N, A>, N>>(
       HumanoidProblem<N, A>(motion, initial, config, pool), mpc);
 }
@@ -71,10 +71,9 @@ template <int A, class Limit>
 double lower_layer_change_of(const BasicCoarseFast<A>& mpc, const Limit& limit, int steps) {
   double change = 0.0;
   for (int j = 0; j < steps; ++j) {
-    change = std::max(change, (mpc.planned_control(j) - mpc.held_control(j))
-                                  .cwiseAbs()
-                                  .cwiseQuotient(limit)
-                                  .maxCoeff());
+    change = std::max(
+        change,
+        (mpc.planned_control(j) - mpc.held_control(j)).cwiseAbs().cwiseQuotient(limit).maxCoeff());
   }
   return change;
 }
@@ -110,10 +109,9 @@ double lowest_non_foot_point(const BasicDynamics<A>& dynamics, const BasicState<
   return lowest;
 }
 
-// A fraction of the sampling period as a clock duration.
-inline Clock::duration period(double fraction) {
-  return std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(fraction * kSamplingPeriod));
+// A time in seconds as a clock duration.
+inline Clock::duration period(double seconds) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 // Coarse-Fast's upper layer's share of the period when truncating. Our choice. The upper layer
@@ -139,16 +137,18 @@ struct LayerTimes {
 // deadline_stop.hpp's rule. Coarse-Fast: the upper layer until kUpperShare of the period, the
 // lower layer until its end.
 template <class Mpc, int A>
-void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate,
-            LayerTimes& times) {
-  DeadlineStop<Clock> stop(start + period(1.0), start + period(1.0), times.upper, truncate);
+void update(Mpc& mpc, const BasicState<A>& x, Clock::time_point start, double sampling_period,
+            bool truncate, LayerTimes& times) {
+  const Clock::time_point end = start + period(sampling_period);
+  DeadlineStop<Clock> stop(end, end, times.upper, truncate);
   mpc.update(to_vector(x), stop);
 }
 template <int A>
-void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start, bool truncate,
-            LayerTimes& times) {
-  const Clock::time_point end = start + period(1.0);
-  DeadlineStop<Clock> upper(start + period(kUpperShare), end, times.upper, truncate);
+void update(BasicCoarseFast<A>& mpc, const BasicState<A>& x, Clock::time_point start,
+            double sampling_period, bool truncate, LayerTimes& times) {
+  const Clock::time_point end = start + period(sampling_period);
+  DeadlineStop<Clock> upper(start + period(kUpperShare * sampling_period), end, times.upper,
+                            truncate);
   DeadlineStop<Clock> fast(end, end, times.fast, truncate);
   mpc.update(to_vector(x), upper, fast);
 }
@@ -266,17 +266,19 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   const BasicModel<A> model(plant.parameters);
   const BasicDynamics<A> body(model);
   BasicStepMap<A> simulator(model, plant.parameters, plant.contact, kSimulatorStep);
-  constexpr int kFineSteps = kFineStepsPerCoarseStep;  // 10 ms input steps per sample
-  // 10 within rounding, far from a half (std::lround is not constexpr).
-  constexpr int kSimulatorSteps =
-      static_cast<int>(kFastStep / kSimulatorStep + 0.5);  // NOLINT(bugprone-incorrect-roundings)
+  // The period's input steps (the lower layer's, Delta t_f each) and their simulator steps.
+  const double sampling_period = config.timing.upper_step;
+  const int kFineSteps = config.timing.fine_steps_per_upper_step();
+  const int kSimulatorSteps =
+      static_cast<int>(std::lround(config.timing.fast_step / kSimulatorStep));
 
   Feedback<A> feedback(config, model, plant.contact, initial);
   if (config.warm_start) mpc.initialize(to_vector(feedback.state(initial)), kOfflineIterations);
   BasicClosedLoopRun<A> run;
   run.initial = initial;
   run.feedback = config.feedback;
-  const int count = static_cast<int>(std::lround(duration / kSamplingPeriod));
+  run.sampling_period = sampling_period;
+  const int count = static_cast<int>(std::lround(duration / sampling_period));
   run.samples.reserve(count);
   if (config.record_milliseconds) {
     run.milliseconds.reserve(static_cast<std::size_t>(count) * kFineSteps * kSimulatorSteps);
@@ -284,7 +286,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   State x = initial;
   LayerTimes times;
   for (int k = 0; k < count; ++k) {
-    const double t0 = k * kSamplingPeriod;
+    const double t0 = k * sampling_period;
     BasicClosedLoopSample<A> sample;
     feedback.give(x, sample);
     if (sample.trust == estimation::Trust::kLost) {
@@ -293,7 +295,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
     }
     problem_of(mpc).set_start_time(t0);
     const auto start = Clock::now();
-    update(mpc, sample.feedback, start, config.truncate, times);
+    update(mpc, sample.feedback, start, sampling_period, config.truncate, times);
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);
     sample.torque = mpc.planned_control(0);
@@ -314,7 +316,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
                             sample);
       }
     }
-    sample.time = t0 + kSamplingPeriod;
+    sample.time = t0 + sampling_period;
     sample.state = x;
     sample.iterations = iterations_of(mpc);
     sample.fast_iterations = fast_iterations_of(mpc);

@@ -85,6 +85,10 @@ struct ClosedLoopConfig {
   SensorConfig sensors{};
   double rest_seconds = 0.5;
   ProblemConfig problem{};
+  // The sampling period (Coarse-Fast's upper step) and the lower layer's step: Table 2.4's, or
+  // the real robot's of Sec. 2.7.3 (kRealRobotTiming, Coarse-Fast and Coarse only: the Fine
+  // MPC's 10 ms steps do not divide its 12 ms period). The Coarse MPC steps at the period.
+  CoarseFastTiming timing = kSimulationTiming;
 };
 
 // One 1 ms step of the simulator: the state at its end, the step's mean acceleration
@@ -134,6 +138,7 @@ struct BasicClosedLoopRun {
   std::vector<BasicClosedLoopSample<A>> samples;
   std::vector<BasicSimulatorStep<A>> milliseconds;  // with ClosedLoopConfig::record_milliseconds
   BasicState<A> initial;
+  double sampling_period = kSamplingPeriod;        // [s], ClosedLoopConfig::timing's
   StateFeedback feedback = StateFeedback::kTruth;  // what the MPC solved from
   double fell_at = -1.0;  // [s] the sample where the run ended early (see fallen_height), or -1
   // [s] the sampling instant where the estimator said its estimate was lost, or -1: the run ends
@@ -165,7 +170,7 @@ struct ClosedLoopSummary {
   double max_solve_ms = 0.0, median_solve_ms = 0.0;
   double mean_iterations = 0.0;
   int truncated = 0, unusable = 0;
-  int overruns = 0;  // solves that took longer than the 30 ms sampling period
+  int overruns = 0;  // solves that took longer than the sampling period
   int samples = 0;
   // Samples where the lower layer changed an applied input by more than kLowerLayerActs of its
   // joint's torque limit.

@@ -23,6 +23,24 @@ constexpr double kTolerance = 5e-2;
 // termination criteria for iLQR was respectively 4 and 5.0 x 10^-1").
 constexpr int kReachingIterationCap = 4;
 constexpr double kReachingTolerance = 0.5;
+// A Coarse-Fast MPC's time grid (horizons N_c = N_f = 10 in every setting): the upper step
+// Delta t_c, which is also the sampling period (the upper plan shifts by one step per sample,
+// Eq. 2.22), and the lower layer's Delta t_f.
+struct CoarseFastTiming {
+  double upper_step = kCoarseStep;  // [s]
+  double fast_step = kFastStep;     // [s]
+  // M = Delta t_c / Delta t_f, Eq. 2.35.
+  int fine_steps_per_upper_step() const;
+  // Fine steps of Delta t_f cover the upper step, each a whole number of simulator steps.
+  bool valid() const;
+};
+// Table 2.4's, the simulations' (Sec. 2.6).
+constexpr CoarseFastTiming kSimulationTiming{kCoarseStep, kFastStep};
+// The real robot's (Sec. 2.7.3): "We set the sampling time to 12 ms. The time-step and the
+// horizon for the upper-layer optimization were 12 ms and 10 ... For the lower-layer
+// optimization, they are 6 ms and 10."
+constexpr CoarseFastTiming kRealRobotTiming{0.012, 0.006};
+
 // Every layer's iLQR settings for `motion`: the reaching ones for a reaching motion.
 IlqrConfig<double> layer_solver(const Motion& motion);
 // Offline optimisation of the initial inputs (Sec. 2.3.4, Fig. 2.2). Our choice: from zero
@@ -43,13 +61,14 @@ using CoarseFast = BasicCoarseFast<0>;
 // hold the robot fell within 0.6 s (input deviations nu grew to 32 N m on a joint by 0.3 s);
 // with the linear hold it stands for 5 s (|nu| at most 8.8 N m on a joint, in the first sample).
 // Moving the held base with its own velocity instead (Eq. 2.51a) fell as well.
-// The MPC for `motion` from `initial` (`config`'s step is overridden per layer, its contact
-// gets the motion's chair), each layer capped at `iteration_cap` iLQR iterations per update (0:
-// layer_solver's). `pool` may be null (serial) and must outlive the MPC.
+// The MPC for `motion` from `initial` (`config`'s step is overridden per layer by `timing`'s,
+// its contact gets the motion's chair), each layer capped at `iteration_cap` iLQR iterations per
+// update (0: layer_solver's). `pool` may be null (serial) and must outlive the MPC. Throws
+// std::invalid_argument for a timing that is not valid().
 template <int A>
-std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
-                                                     const BasicState<A>& initial, ThreadPool* pool,
-                                                     ProblemConfig config = ProblemConfig{},
-                                                     int iteration_cap = 0);
+std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(
+    const Motion& motion, const BasicState<A>& initial, ThreadPool* pool,
+    ProblemConfig config = ProblemConfig{}, int iteration_cap = 0,
+    const CoarseFastTiming& timing = kSimulationTiming);
 
 }  // namespace hmpc::humanoid

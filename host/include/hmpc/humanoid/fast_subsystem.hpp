@@ -116,7 +116,8 @@ class FastSubsystem
           fz.template block<kJoints, kJoints>(r * kJoints, c * kJoints) =
               fx.template block<kJoints, kJoints>(joint_index(r), joint_index(c));
         }
-        fu.template middleRows<kJoints>(r * kJoints) = fx_u.template middleRows<kJoints>(joint_index(r));
+        fu.template middleRows<kJoints>(r * kJoints) =
+            fx_u.template middleRows<kJoints>(joint_index(r));
       }
     } else {
       this->step_map(j).linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu,

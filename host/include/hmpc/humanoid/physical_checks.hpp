@@ -6,14 +6,16 @@
 //         0.5 s (the start from rest) at least 80 % of the target, at least 4 touchdowns with
 //         the feet alternating (a touchdown: a foot's vertical load rising through 10 % of
 //         m g, well above contact noise and far below a stance's 50 %); III also with
-//         flight phases, both feet unloaded in at least 3 samples;
+//         flight phases, both feet unloaded in samples adding up to at least 90 ms (three
+//         of Table 2.4's 30 ms samples);
 //   IV    sitting: the seat carrying at least half the weight with the base point below
 //         0.72 m (within 7 cm of Table 2.3's 0.65 m: the seat's 0.50 m height plus our
 //         pelvis), then standing: the last 0.3 s unloaded seat and base at 0.85 +- 0.05 m;
-//   V-VII jumps: a flight phase, both feet unloaded for at least 2 consecutive samples
-//         (60 ms: longer than a stumble's lift-off), and an upright landing: the last 0.3 s
-//         on the feet, base at 0.85 +- 0.05 m, torso tilt below 0.3 rad; VI also the yaw
-//         turned by pi +- 0.3 rad; VII's apex above V's (checked across runs by the caller);
+//   V-VII jumps: a flight phase, both feet unloaded in consecutive samples over at least
+//         60 ms (two 30 ms samples: longer than a stumble's lift-off), and an upright
+//         landing: the last 0.3 s on the feet, base at 0.85 +- 0.05 m, torso tilt below 0.3
+//         rad; VI also the yaw turned by pi +- 0.3 rad; VII's apex above V's (checked across
+//         runs by the caller);
 //   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
 //         full rotations), a flight phase, and an upright landing as for V-VII;
 //   squat (a phase with a sinusoidal height target: Sec. 2.7.3's slow squat): from the squat's

@@ -169,8 +169,8 @@ class BasicStepMap {
   template <class Substep>
   State advance(const State& x, double dt, const Substep& substep) const;
   // base_held: step_joints()'s sub-step, with the base acceleration held_base.
-  void substep(State& x, const JointVector& tau, double h, const Velocity& external,
-               bool base_held, const Vector6& held_base);
+  void substep(State& x, const JointVector& tau, double h, const Velocity& external, bool base_held,
+               const Vector6& held_base);
   // (S1)'s a = dv / h at x (base_held: its first six entries held_base, the rest from the
   // joint rows); leaves kinematics_, contact_state_, the dynamics' configuration and the
   // Cholesky factor of A (cholesky_, or joint_cholesky_) at x.
