@@ -175,19 +175,6 @@ int main(int argc, char** argv) {
   int seed = 1;
   parser.integer("--sensor-seed", 0, 2147483647, seed);
   parser.integer("--iteration-cap", 1, 1000, config.iteration_cap);
-  parser.text("--fast-dynamics", [&](const std::string& v) {
-    const std::pair<const char*, FastDynamics> names[] = {
-        {"base-held", FastDynamics::kBaseHeld},
-        {"base-accelerated", FastDynamics::kBaseAcceleratedAsPlanned},
-        {"whole-body", FastDynamics::kWholeBody}};
-    for (const auto& [name, value] : names) {
-      if (v == name) {
-        config.problem.fast_dynamics = value;
-        return std::string();
-      }
-    }
-    return hmpc::cli::bad_value("--fast-dynamics", "base-held, base-accelerated or whole-body", v);
-  });
   parser.number("--model-slip-velocity", 0.001, 1.0, "m/s in 0.001..1",
                 config.problem.model_slip_velocity);
   parser.flag("--no-warm-start", no_warm_start);

@@ -128,17 +128,14 @@ BasicState<A> BasicStepMap<A>::advance(const State& x, double dt, const Substep&
 template <int A>
 BasicState<A> BasicStepMap<A>::step(const State& x, const JointVector& tau, double dt,
                                     const Velocity& external) {
-  return advance(x, dt, [&](State& s, const SubStep& sub) {
-    substep(s, tau, sub.h, external, false, Vector6::Zero());
-  });
+  return advance(x, dt,
+                 [&](State& s, const SubStep& sub) { substep(s, tau, sub.h, external, false); });
 }
 
 template <int A>
-BasicState<A> BasicStepMap<A>::step_joints(const State& x, const JointVector& tau, double dt,
-                                           const Vector6& base_acceleration) {
-  return advance(x, dt, [&](State& s, const SubStep& sub) {
-    substep(s, tau, sub.h, Velocity::Zero(), true, base_acceleration);
-  });
+BasicState<A> BasicStepMap<A>::step_joints(const State& x, const JointVector& tau, double dt) {
+  return advance(
+      x, dt, [&](State& s, const SubStep& sub) { substep(s, tau, sub.h, Velocity::Zero(), true); });
 }
 
 // The sub-step lengths' derivatives: zero for a fixed length, -h / rate d rate for the
@@ -183,18 +180,16 @@ BasicState<A> BasicStepMap<A>::linearise(const State& x, const JointVector& tau,
 
 template <int A>
 BasicState<A> BasicStepMap<A>::linearise_joints(const State& x, const JointVector& tau, double dt,
-                                                JointStepJacobian& fz, JointControlJacobian& fu,
-                                                const Vector6& base_acceleration) {
+                                                JointStepJacobian& fz, JointControlJacobian& fu) {
   return linearise_chain<kJoints>(
       x, dt, fz, fu, [&](State& s, double h, const JointStateRow& dh_z, const ControlRow& dh_u) {
-        linearised_joint_substep(s, tau, h, base_acceleration, dh_z, dh_u, fz, fu);
+        linearised_joint_substep(s, tau, h, dh_z, dh_u, fz, fu);
       });
 }
 
 template <int A>
 BasicVelocity<A> BasicStepMap<A>::acceleration(const State& x, const JointVector& tau, double h,
-                                               const Velocity& external, bool base_held,
-                                               const Vector6& held_base) {
+                                               const Velocity& external, bool base_held) {
   // evaluate_contact() also sets the dynamics' configuration for M and c.
   const ContactState& contact = evaluate_contact(x);
   Velocity rhs = external - dynamics_.inverse_dynamics(x.v, Velocity::Zero()) +
@@ -214,9 +209,6 @@ BasicVelocity<A> BasicStepMap<A>::acceleration(const State& x, const JointVector
   }
   Velocity a = Velocity::Zero();
   if (base_held) {
-    a.template head<kBaseDofs>() = held_base;
-    rhs.template tail<kJoints>().noalias() -=
-        iteration_matrix_.template bottomLeftCorner<kJoints, kBaseDofs>() * held_base;
     joint_cholesky_.compute(iteration_matrix_.template bottomRightCorner<kJoints, kJoints>());
     a.template tail<kJoints>() = joint_cholesky_.solve(rhs.template tail<kJoints>());
   } else {
@@ -228,8 +220,8 @@ BasicVelocity<A> BasicStepMap<A>::acceleration(const State& x, const JointVector
 
 template <int A>
 void BasicStepMap<A>::substep(State& x, const JointVector& tau, double h, const Velocity& external,
-                              bool base_held, const Vector6& held_base) {
-  const Velocity a = acceleration(x, tau, h, external, base_held, held_base);
+                              bool base_held) {
+  const Velocity a = acceleration(x, tau, h, external, base_held);
   if (base_held) {
     x.v.template tail<kJoints>() += h * a.template tail<kJoints>();
     x.q.template tail<kJoints>() += h * x.v.template tail<kJoints>();
@@ -390,7 +382,7 @@ template <int A>
 void BasicStepMap<A>::linearised_substep(State& x, const JointVector& tau, double h,
                                          const StateRow& dh_x, const ControlRow& dh_u,
                                          StepJacobian& fx, StepControlJacobian& fu) {
-  const Velocity a = acceleration(x, tau, h, Velocity::Zero(), false, Vector6::Zero());
+  const Velocity a = acceleration(x, tau, h, Velocity::Zero(), false);
   residual_jacobian(x, a, h, 0, kConfigurationSize, 0, kDofs);
   // (L1) and the derivative of v+ = v + h a with A = M - h sum J^T D J in h:
   // [dv+/dx, dv+/dtau, dv+/dh] = h A^-1 [dr/dx, S^T, sum J^T D J a] + [(0 1), 0, a].
@@ -466,10 +458,9 @@ void BasicStepMap<A>::linearised_substep(State& x, const JointVector& tau, doubl
 
 template <int A>
 void BasicStepMap<A>::linearised_joint_substep(State& x, const JointVector& tau, double h,
-                                               const Vector6& held_base, const JointStateRow& dh_z,
-                                               const ControlRow& dh_u, JointStepJacobian& fz,
-                                               JointControlJacobian& fu) {
-  const Velocity a = acceleration(x, tau, h, Velocity::Zero(), true, held_base);
+                                               const JointStateRow& dh_z, const ControlRow& dh_u,
+                                               JointStepJacobian& fz, JointControlJacobian& fu) {
+  const Velocity a = acceleration(x, tau, h, Velocity::Zero(), true);
   residual_jacobian(x, a, h, kFirstJoint, kJoints, kBaseDofs, kJoints);
   // (L1) on the leg rows, as in linearised_substep with A22 for A.
   using LegMatrix = Eigen::Matrix<double, kJoints, kJoints>;

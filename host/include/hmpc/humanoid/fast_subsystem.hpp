@@ -105,23 +105,9 @@ class FastSubsystem
                             ControlJacobian& fu) const {
     if (config_.linearisation == Linearisation::kWholeStepDifferences) {
       Base::dynamics_derivatives(zeta, nu, j, fz, fu);
-    } else if (config_.fast_dynamics == FastDynamics::kWholeBody) {
-      // dz+/dz at the base's start held: the joints' rows and columns of the whole step's.
-      BasicStateMatrix<A> fx;
-      Eigen::Matrix<double, Dimensions<A>::kStateSize, kJoints> fx_u;
-      this->step_map(j).linearise(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step,
-                                  fx, fx_u);
-      for (int r = 0; r < 2; ++r) {
-        for (int c = 0; c < 2; ++c) {
-          fz.template block<kJoints, kJoints>(r * kJoints, c * kJoints) =
-              fx.template block<kJoints, kJoints>(joint_index(r), joint_index(c));
-        }
-        fu.template middleRows<kJoints>(r * kJoints) =
-            fx_u.template middleRows<kJoints>(joint_index(r));
-      }
     } else {
       this->step_map(j).linearise_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu,
-                                         config_.step, fz, fu, base_acceleration(j));
+                                         config_.step, fz, fu);
     }
   }
 
@@ -149,26 +135,9 @@ class FastSubsystem
   // Eq. 2.51c: zeta_{j+1} = z(t_j + Delta t_f) - z_hat_{j+1}, z moved with y held at y_hat_j
   // (dynamics() in step j's workspace, StepMapProblem).
   State dynamics_in(StepMap& map, const State& zeta, const Control& nu, int j) const {
-    const BasicState<ArmJoints> start = to_state<A>(full_state(zeta, j));
     const BasicState<ArmJoints> next =
-        config_.fast_dynamics == FastDynamics::kWholeBody
-            ? map.step(start, u_hat_[j] + nu, config_.step)
-            : map.step_joints(start, u_hat_[j] + nu, config_.step, base_acceleration(j));
+        map.step_joints(to_state<A>(full_state(zeta, j)), u_hat_[j] + nu, config_.step);
     return fast_part(to_vector(next)) - fast_part(x_hat_[j + 1]);
-  }
-
-  // The base acceleration the joints are loaded with in fine step j: the plan's over the step,
-  // (v_hat_{j+1} - v_hat_j) / Delta t_f in its base part (torso coordinates), or zero.
-  Vector6 base_acceleration(int j) const {
-    if (config_.fast_dynamics != FastDynamics::kBaseAcceleratedAsPlanned) return Vector6::Zero();
-    constexpr int first = Dimensions<ArmJoints>::kConfigurationSize;
-    return (x_hat_[j + 1].template segment<kBaseDofs>(first) -
-            x_hat_[j].template segment<kBaseDofs>(first)) /
-           config_.step;
-  }
-  // Index in x = (q, v) of the joints' angles (part 0) or rates (part 1).
-  static constexpr int joint_index(int part) {
-    return part == 0 ? 7 : Dimensions<ArmJoints>::kConfigurationSize + kBaseDofs;
   }
 
   CostWeights weights_;

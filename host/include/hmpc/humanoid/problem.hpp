@@ -74,9 +74,6 @@ BasicState<A> to_state(const BasicStateVector<A>& x) {
 // analytic residual derivatives, the same with differenced ones, or whole-step differences.
 enum class Linearisation { kAnalytic, kSubStepChainRule, kWholeStepDifferences };
 
-// ProblemConfig::fast_dynamics.
-enum class FastDynamics { kBaseHeld, kBaseAcceleratedAsPlanned, kWholeBody };
-
 struct ProblemConfig {
   double step = 0.03;  // Delta t of the model [s]: 30 ms coarse, 10 ms fine (Table 2.4)
   // Sub-step of the step map inside the MPC's model. The simulator steps at 1 ms (Sec.
@@ -103,11 +100,6 @@ struct ProblemConfig {
   // certify single trajectories, which round-off-level changes flip (README), so a change of
   // linearisation waits for checks over perturbed starts.
   Linearisation linearisation = Linearisation::kSubStepChainRule;
-  // What Coarse-Fast's lower layer (fast_subsystem.hpp) moves in a fine step: the joints alone
-  // with the base held at the upper plan's state (StepMap::step_joints, Eq. 2.51c), the same
-  // with the joints loaded by the plan's base acceleration over the step, or the whole body from
-  // the plan's base state, the base's own motion in the step then discarded.
-  FastDynamics fast_dynamics = FastDynamics::kBaseHeld;
   // Line-search rollouts run at once on a pool with a second thread (rollout_lanes in
   // hmpc/solver/problem.hpp): 2, or 1 for one at a time (the benchmark's comparison); the
   // solution is the same either way.

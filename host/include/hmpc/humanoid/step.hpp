@@ -127,12 +127,10 @@ class BasicStepMap {
 
   // The fast subsystem's step (Eqs. 2.50-2.51, fast_subsystem.hpp): the base held, pose and
   // velocity (Eq. 2.28: the slow variables are constant on the fast time scale), and the
-  // joints moved by the joint rows of (S1) with the base acceleration a_b (zero by default),
-  //   (M22 - h sum_i J_i,z^T D_i J_i,z) dv_z = h (tau - c_z + (sum_i J_i^T f_i)_z - A21 a_b),
-  // M22 = epsilon Q22 of Eq. 2.50b, A21 the iteration matrix's joint-base block. Same
-  // sub-steps as step().
-  State step_joints(const State& x, const JointVector& tau, double dt,
-                    const Vector6& base_acceleration = Vector6::Zero());
+  // joints moved by the joint rows of (S1) with the base acceleration zero,
+  //   (M22 - h sum_i J_i,z^T D_i J_i,z) dv_z = h (tau - c_z + (sum_i J_i^T f_i)_z),
+  // M22 = epsilon Q22 of Eq. 2.50b. Same sub-steps as step().
+  State step_joints(const State& x, const JointVector& tau, double dt);
 
   // step(x, tau, dt) (no tau_ext), the same numbers, and its Jacobians by (L1)-(L2).
   State linearise(const State& x, const JointVector& tau, double dt, StepJacobian& fx,
@@ -140,8 +138,7 @@ class BasicStepMap {
   // step_joints(x, tau, dt), the same numbers, and its Jacobians with respect to the joints'
   // z and tau by (L1)-(L2) restricted to the joint rows and columns (the base held).
   State linearise_joints(const State& x, const JointVector& tau, double dt, JointStepJacobian& fz,
-                         JointControlJacobian& fu,
-                         const Vector6& base_acceleration = Vector6::Zero());
+                         JointControlJacobian& fu);
 
   // The contact state last evaluated (forces, points, Jacobians): at the start of the last
   // sub-step, or by evaluate_contact(); after a linearisation, at some perturbed state.
@@ -168,14 +165,13 @@ class BasicStepMap {
   // dt cut into sub-steps (see above), each done by substep(x, SubStep).
   template <class Substep>
   State advance(const State& x, double dt, const Substep& substep) const;
-  // base_held: step_joints()'s sub-step, with the base acceleration held_base.
-  void substep(State& x, const JointVector& tau, double h, const Velocity& external, bool base_held,
-               const Vector6& held_base);
-  // (S1)'s a = dv / h at x (base_held: its first six entries held_base, the rest from the
-  // joint rows); leaves kinematics_, contact_state_, the dynamics' configuration and the
-  // Cholesky factor of A (cholesky_, or joint_cholesky_) at x.
+  void substep(State& x, const JointVector& tau, double h, const Velocity& external,
+               bool base_held);
+  // (S1)'s a = dv / h at x (base_held: its first six entries zero, the rest from the joint
+  // rows); leaves kinematics_, contact_state_, the dynamics' configuration and the Cholesky
+  // factor of A (cholesky_, or joint_cholesky_) at x.
   Velocity acceleration(const State& x, const JointVector& tau, double h, const Velocity& external,
-                        bool base_held, const Vector6& held_base);
+                        bool base_held);
   // For the linearisation, right after acceleration(x, ...) returned a: dr/dx of (L2) into
   // residual_jacobian_ by forward differences, its first q_count columns for q's entries
   // from first_q, the next v_count for v's from first_v; and d(b - A a)/dh, sum_i J_i^T D_i
@@ -199,9 +195,8 @@ class BasicStepMap {
   void linearised_substep(State& x, const JointVector& tau, double h, const StateRow& dh_x,
                           const ControlRow& dh_u, StepJacobian& fx, StepControlJacobian& fu);
   void linearised_joint_substep(State& x, const JointVector& tau, double h,
-                                const Vector6& held_base, const JointStateRow& dh_z,
-                                const ControlRow& dh_u, JointStepJacobian& fz,
-                                JointControlJacobian& fu);
+                                const JointStateRow& dh_z, const ControlRow& dh_u,
+                                JointStepJacobian& fz, JointControlJacobian& fu);
 
   // The end stops' part of (L2)'s r for joint j at (q, v) and the nominal acceleration a
   // (see step.hpp's file comment).
