@@ -464,6 +464,7 @@ void substep_error() {
   constexpr double kStep = 0.03;
   StepMap reference(Model{}, Parameters{}, ContactParameters{}, 1e-3);
   std::vector<State> truth;
+  truth.reserve(starts.size());
   for (const auto& [x, tau] : starts) truth.push_back(reference.step(x, tau, kStep));
   const auto percentile = [](std::vector<double> v, double p) {
     std::sort(v.begin(), v.end());
@@ -525,6 +526,7 @@ void real_robot(int threads, Linearisation linearisation) {
     const ClosedLoopRun run = run_closed_loop(motion, config);
     const ClosedLoopSummary s = summarise(run);
     std::vector<double> solve;
+    solve.reserve(run.samples.size());
     for (const ClosedLoopSample& sample : run.samples) solve.push_back(sample.solve_seconds * 1e3);
     std::sort(solve.begin(), solve.end());
     const double p99 = solve.empty() ? 0.0 : solve[(solve.size() * 99) / 100];

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 
@@ -71,16 +72,24 @@ TEST(HumanoidPhysicalChecks, StandingBand) {
   EXPECT_EQ(check_motion("I", m, run).verdict, "fell at 1.00 s");
 }
 
+// A run of standing samples, one per value, each given its value by `set`.
+template <class Set>
+ClosedLoopRun samples_with(std::initializer_list<double> values, const Set& set) {
+  ClosedLoopRun run;
+  for (const double value : values) {
+    ClosedLoopSample s = sample(0.03 * (run.samples.size() + 1), 0.85, 230.0, 230.0);
+    set(s, value);
+    run.samples.push_back(s);
+  }
+  return run;
+}
+
 // The summary counts the solves longer than the sampling period, the max alone not telling a
 // single stall from a systematic overrun.
 TEST(HumanoidClosedLoop, SummaryCountsSolvesOverThePeriod) {
-  ClosedLoopRun run;
-  for (const double seconds : {0.010, 0.029, 0.0301, 0.045, 0.020}) {
-    ClosedLoopSample s = sample(0.03 * (run.samples.size() + 1), 0.85, 230.0, 230.0);
-    s.solve_seconds = seconds;
-    run.samples.push_back(s);
-  }
-  const ClosedLoopSummary s = summarise(run);
+  const ClosedLoopSummary s =
+      summarise(samples_with({0.010, 0.029, 0.0301, 0.045, 0.020},
+                             [](ClosedLoopSample& x, double v) { x.solve_seconds = v; }));
   EXPECT_EQ(s.overruns, 2);
   EXPECT_DOUBLE_EQ(s.max_solve_ms, 45.0);
   EXPECT_DOUBLE_EQ(s.median_solve_ms, 29.0);
@@ -89,12 +98,9 @@ TEST(HumanoidClosedLoop, SummaryCountsSolvesOverThePeriod) {
 // The lower layer counts as acting on a sample where it changed an applied torque by more than
 // kLowerLayerActs of the joint's limit.
 TEST(HumanoidClosedLoop, SummaryCountsTheSamplesWhereTheLowerLayerActed) {
-  ClosedLoopRun run;
-  for (const double change : {0.0, 0.005, 0.0101, 0.3, 0.01}) {
-    ClosedLoopSample s = sample(0.03 * (run.samples.size() + 1), 0.85, 230.0, 230.0);
-    s.lower_layer_change = change;
-    run.samples.push_back(s);
-  }
+  const ClosedLoopRun run =
+      samples_with({0.0, 0.005, 0.0101, 0.3, 0.01},
+                   [](ClosedLoopSample& x, double v) { x.lower_layer_change = v; });
   EXPECT_EQ(summarise(run).lower_layer_acted, 2);
 }
 
