@@ -51,11 +51,7 @@ BasicClosedLoopRun<A> run_closed_loop(const Motion& motion, const ClosedLoopConf
   if (config.threads < 1 || config.threads > 64) {
     throw std::invalid_argument("closed loop: threads must be in 1..64");
   }
-  if (!config.timing.valid()) {
-    throw std::invalid_argument(
-        "closed loop: the sampling period must be a whole number of lower-layer steps, each a "
-        "whole number of 1 ms simulator steps, at most 1 s");
-  }
+  config.timing.check("closed loop");
   if (config.mpc == MpcKind::kFine && (config.timing.upper_step != kSimulationTiming.upper_step ||
                                        config.timing.fast_step != kSimulationTiming.fast_step)) {
     throw std::invalid_argument("closed loop: the Fine MPC runs in Table 2.4's timing only");

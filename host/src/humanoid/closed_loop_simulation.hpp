@@ -268,8 +268,8 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   BasicStepMap<A> simulator(model, plant.parameters, plant.contact, kSimulatorStep);
   // The period's input steps (the lower layer's, Delta t_f each) and their simulator steps.
   const double sampling_period = config.timing.upper_step;
-  const int kFineSteps = config.timing.fine_steps_per_upper_step();
-  const int kSimulatorSteps =
+  const int fine_steps = config.timing.fine_steps_per_upper_step();
+  const int simulator_steps =
       static_cast<int>(std::lround(config.timing.fast_step / kSimulatorStep));
 
   Feedback<A> feedback(config, model, plant.contact, initial);
@@ -281,7 +281,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   const int count = static_cast<int>(std::lround(duration / sampling_period));
   run.samples.reserve(count);
   if (config.record_milliseconds) {
-    run.milliseconds.reserve(static_cast<std::size_t>(count) * kFineSteps * kSimulatorSteps);
+    run.milliseconds.reserve(static_cast<std::size_t>(count) * fine_steps * simulator_steps);
   }
   State x = initial;
   LayerTimes times;
@@ -299,10 +299,10 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);
     sample.torque = mpc.planned_control(0);
-    for (int j = 0; j < kFineSteps; ++j) {
+    for (int j = 0; j < fine_steps; ++j) {
       const BasicJointVector<A> u = mpc.planned_control(j);
-      for (int i = 0; i < kSimulatorSteps; ++i) {
-        const double t = t0 + (j * kSimulatorSteps + i) * kSimulatorStep;
+      for (int i = 0; i < simulator_steps; ++i) {
+        const double t = t0 + (j * simulator_steps + i) * kSimulatorStep;
         sample.cost += (observer.value(to_vector(x), t) + observer.control_cost(u)) *
                        (kSimulatorStep / kCoarseStep);
         const State next = simulator.step(x, u, kSimulatorStep);
@@ -312,7 +312,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
         }
         feedback.step(next, acceleration, u);
         x = next;
-        add_vertical_forces(simulator.contact_state(), 1.0 / (kFineSteps * kSimulatorSteps),
+        add_vertical_forces(simulator.contact_state(), 1.0 / (fine_steps * simulator_steps),
                             sample);
       }
     }
@@ -320,7 +320,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
     sample.state = x;
     sample.iterations = iterations_of(mpc);
     sample.fast_iterations = fast_iterations_of(mpc);
-    sample.lower_layer_change = lower_layer_change_of(mpc, model.torque_limit, kFineSteps);
+    sample.lower_layer_change = lower_layer_change_of(mpc, model.torque_limit, fine_steps);
     sample.plan_usable = mpc.last_plan_usable();
     if (finite(x)) sample.base = observer.features(x);
     run.samples.push_back(sample);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace hmpc::humanoid {
 
@@ -18,6 +19,14 @@ bool CoarseFastTiming::valid() const {
          multiple(upper_step, fast_step) && multiple(fast_step, kSimulatorStep);
 }
 
+void CoarseFastTiming::check(const char* who) const {
+  if (!valid()) {
+    throw std::invalid_argument(std::string(who) +
+                                ": the sampling period must be a whole number of lower-layer "
+                                "steps, each a whole number of 1 ms simulator steps, at most 1 s");
+  }
+}
+
 IlqrConfig<double> layer_solver(const Motion& motion) {
   return motion.reach.active
              ? IlqrConfig<double>::with_cap_and_tolerance(kReachingIterationCap, kReachingTolerance)
@@ -30,11 +39,7 @@ std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(const Motion& motion,
                                                      ProblemConfig config, int iteration_cap,
                                                      const CoarseFastTiming& timing) {
   using CoarseFast = BasicCoarseFast<A>;
-  if (!timing.valid()) {
-    throw std::invalid_argument(
-        "Coarse-Fast: the upper step must be a whole number of lower steps, each a whole number "
-        "of 1 ms simulator steps, at most 1 s");
-  }
+  timing.check("Coarse-Fast");
   config = model_config(motion, config);
   ProblemConfig coarse = config, fast = config;
   coarse.step = timing.upper_step;

@@ -33,6 +33,8 @@ struct CoarseFastTiming {
   int fine_steps_per_upper_step() const;
   // Fine steps of Delta t_f cover the upper step, each a whole number of simulator steps.
   bool valid() const;
+  // Throws std::invalid_argument, the message starting with `who`, unless valid().
+  void check(const char* who) const;
 };
 // Table 2.4's, the simulations' (Sec. 2.6).
 constexpr CoarseFastTiming kSimulationTiming{kCoarseStep, kFastStep};
@@ -64,7 +66,7 @@ using CoarseFast = BasicCoarseFast<0>;
 // The MPC for `motion` from `initial` (`config`'s step is overridden per layer by `timing`'s,
 // its contact gets the motion's chair), each layer capped at `iteration_cap` iLQR iterations per
 // update (0: layer_solver's). `pool` may be null (serial) and must outlive the MPC. Throws
-// std::invalid_argument for a timing that is not valid().
+// std::invalid_argument for a timing that is not valid() (CoarseFastTiming::check).
 template <int A>
 std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(
     const Motion& motion, const BasicState<A>& initial, ThreadPool* pool,
