@@ -114,6 +114,10 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
       const PhysicalCheck check = check_squat(motion, run);
       std::printf("physical check of the squat: %s: %s\n", check.passed ? "PASSED" : "FAILED",
                   check.verdict.c_str());
+    } else if (motion.weights.position > 0.0) {
+      const PhysicalCheck check = check_hip_hold(run);
+      std::printf("physical check of the hip hold: %s: %s\n", check.passed ? "PASSED" : "FAILED",
+                  check.verdict.c_str());
     }
   }
   const std::string title = stem + ", " + name_of(config.mpc) + " MPC";

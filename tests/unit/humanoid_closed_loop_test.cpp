@@ -140,38 +140,66 @@ TEST(HumanoidPhysicalChecks, WalkingNeedsSpeedAndAlternatingSteps) {
   EXPECT_FALSE(check_motion("II", m, run).passed);
 }
 
-// The slow squat: a base point on the target height passes; one that stands instead (2.4 cm
-// RMS off), lags by an eighth of the period (1.1 cm), lifts a foot or leans over fails.
+// The squats (slow-squat 4 cm, hip-squat 2 cm): a base point on the target height passes; one
+// that stands instead (0.61 depths RMS off), lags by an eighth of the period (0.27 depths),
+// lifts a foot or leans over fails.
 TEST(HumanoidPhysicalChecks, SquatFollowsTheTargetHeightOnBothFeet) {
-  const Motion m = motion("slow-squat");
-  ASSERT_TRUE(has_squat(m));
   EXPECT_FALSE(has_squat(motion("I-standing")));
-  const double period = m.phase_at(m.duration).squat_period;
-  const auto squat = [&](double lag) {
-    ClosedLoopRun run;
-    for (int k = 1; k * kSamplingPeriod <= m.duration; ++k) {
-      const double t = k * kSamplingPeriod;
-      const double z = m.phase_at(std::max(t - lag, 0.0)).height_at(std::max(t - lag, 0.0));
-      run.samples.push_back(sample(t, z, 230.0, 230.0));
-    }
-    return run;
-  };
-  const ClosedLoopRun followed = squat(0.0);
-  EXPECT_TRUE(check_squat(m, followed).passed) << check_squat(m, followed).verdict;
-  EXPECT_FALSE(check_squat(m, squat(period / 8)).passed)
-      << check_squat(m, squat(period / 8)).verdict;
-  ClosedLoopRun stood = followed;
-  for (ClosedLoopSample& s : stood.samples) s.base.position.z() = 0.85;
-  EXPECT_FALSE(check_squat(m, stood).passed);
-  ClosedLoopRun stepped = followed;
-  stepped.samples[200].right_force = 10.0;
-  EXPECT_FALSE(check_squat(m, stepped).passed);
-  ClosedLoopRun leaned = followed;
-  leaned.samples[100].base.quaternion = Eigen::Vector4d(std::cos(0.16), 0.0, std::sin(0.16), 0.0);
-  EXPECT_FALSE(check_squat(m, leaned).passed);  // 0.32 rad
-  ClosedLoopRun early = followed;
-  early.samples.resize(20);  // 0.6 s, before the squat starts
-  EXPECT_FALSE(check_squat(m, early).passed);
+  for (const char* name : {"slow-squat", "hip-squat"}) {
+    SCOPED_TRACE(name);
+    const Motion m = motion(name);
+    ASSERT_TRUE(has_squat(m));
+    const double period = m.phase_at(m.duration).squat_period;
+    const auto squat = [&](double lag) {
+      ClosedLoopRun run;
+      for (int k = 1; k * kSamplingPeriod <= m.duration; ++k) {
+        const double t = k * kSamplingPeriod;
+        const double z = m.phase_at(std::max(t - lag, 0.0)).height_at(std::max(t - lag, 0.0));
+        run.samples.push_back(sample(t, z, 230.0, 230.0));
+      }
+      return run;
+    };
+    const ClosedLoopRun followed = squat(0.0);
+    EXPECT_TRUE(check_squat(m, followed).passed) << check_squat(m, followed).verdict;
+    EXPECT_FALSE(check_squat(m, squat(period / 8)).passed)
+        << check_squat(m, squat(period / 8)).verdict;
+    ClosedLoopRun stood = followed;
+    for (ClosedLoopSample& s : stood.samples) s.base.position.z() = 0.85;
+    EXPECT_FALSE(check_squat(m, stood).passed);
+    ClosedLoopRun stepped = followed;
+    stepped.samples[200].right_force = 10.0;
+    EXPECT_FALSE(check_squat(m, stepped).passed);
+    ClosedLoopRun leaned = followed;
+    leaned.samples[100].base.quaternion =
+        Eigen::Vector4d(std::cos(0.16), 0.0, std::sin(0.16), 0.0);
+    EXPECT_FALSE(check_squat(m, leaned).passed);  // 0.32 rad
+    ClosedLoopRun early = followed;
+    early.samples.resize(20);  // 0.6 s, before the squat starts
+    EXPECT_FALSE(check_squat(m, early).passed);
+  }
+}
+
+// The hip hold: standing where it started passes; 5.1 cm away at one sample (in any horizontal
+// direction), or outside the standing band, or a fall, fails.
+TEST(HumanoidPhysicalChecks, HipHoldStaysWhereItStarted) {
+  ClosedLoopRun run;
+  for (int k = 1; k <= 100; ++k) run.samples.push_back(sample(0.012 * k, 0.85, 230.0, 230.0));
+  for (ClosedLoopSample& s : run.samples) s.base.position.head<2>() << 0.3, -0.2;
+  EXPECT_TRUE(check_hip_hold(run).passed) << check_hip_hold(run).verdict;
+  run.samples[60].base.position.head<2>() += Eigen::Vector2d(0.03, 0.04);
+  EXPECT_NEAR(hip_drift(run), 0.05, 1e-12);
+  EXPECT_TRUE(check_hip_hold(run).passed) << check_hip_hold(run).verdict;
+  run.samples[60].base.position.head<2>() += Eigen::Vector2d(-0.03, -0.04);
+  for (const Eigen::Vector2d away : {Eigen::Vector2d(0.051, 0.0), Eigen::Vector2d(0.0, -0.051)}) {
+    ClosedLoopRun drifted = run;
+    drifted.samples[60].base.position.head<2>() += away;
+    EXPECT_FALSE(check_hip_hold(drifted).passed) << check_hip_hold(drifted).verdict;
+  }
+  ClosedLoopRun sagged = run;
+  sagged.samples[60].base.position.z() = 0.79;
+  EXPECT_FALSE(check_hip_hold(sagged).passed);
+  run.fell_at = 1.0;
+  EXPECT_FALSE(check_hip_hold(run).passed);
 }
 
 TEST(HumanoidPhysicalChecks, MotionNumerals) {

@@ -125,6 +125,8 @@ void expect_same_motion(const Motion& a, const Motion& b) {
   EXPECT_EQ(u.fast, v.fast);
   EXPECT_EQ(u.fast_control, v.fast_control);
   EXPECT_EQ(u.foot, v.foot);
+  EXPECT_EQ(u.position, v.position);
+  EXPECT_EQ(u.joint_velocity, v.joint_velocity);
   EXPECT_EQ(a.reach.active, b.reach.active);
   EXPECT_EQ(a.reach.target, b.reach.target);
   EXPECT_EQ(a.reach.start, b.reach.start);
@@ -149,7 +151,7 @@ Motion written_and_read(const Motion& m) {
 
 TEST(HumanoidMotion, WrittenMotionsReadBackExactly) {
   for (const char* name : {"II-walking", "IV-sitting", "V-low-jump", "VIII-double-flip", "reaching",
-                           "squatting", "slow-squat"}) {
+                           "squatting", "slow-squat", "hip-hold", "hip-squat"}) {
     SCOPED_TRACE(name);
     const Motion m = load_motion(motion_path(name));
     expect_same_motion(m, written_and_read(m));
@@ -340,6 +342,26 @@ TEST(HumanoidMotion, ModelSubstepIsOptionalAndReachesTheMpcModel) {
   const Motion chair = parse(replace(kValid, "chair = none", "chair = 0.5 -0.6 -0.1"));
   EXPECT_TRUE(model_config(chair, defaults).contact.chair);
   EXPECT_DOUBLE_EQ(model_config(chair, defaults).contact.seat_height, 0.5);
+}
+
+// Sec. 2.7.3's two terms are optional weights: 0 left out (every motion of Tables 2.2-2.3),
+// read when given, and checked as every weight is.
+TEST(HumanoidMotion, HipPositionAndJointRateWeightsAreOptional) {
+  const Motion plain = parse(kValid);
+  EXPECT_EQ(plain.weights.position, 0.0);
+  EXPECT_EQ(plain.weights.joint_velocity, 0.0);
+  const Motion held =
+      parse(replace(kValid, "w_foot = 1", "w_foot = 1\nw_position = 400\nw_joint_velocity = 0.1"));
+  EXPECT_EQ(held.weights.position, 400.0);
+  EXPECT_EQ(held.weights.joint_velocity, 0.1);
+  EXPECT_EQ(load_motion(motion_path("hip-hold")).weights.position, 400.0);
+  try {
+    parse(replace(kValid, "w_foot = 1", "w_foot = 1\nw_position = -1"));
+    ADD_FAILURE() << "a negative w_position was accepted";
+  } catch (const MotionFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("w_position: a weight must be >= 0"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(HumanoidMotion, GaitSwingsTheFeetInTurn) {

@@ -86,6 +86,23 @@ TEST(HumanoidProblem, EachCostTermFollowsItsEquation) {
   x.v.head<3>() << 0.2, 0.0, 0.0;  // body x, which the yaw turns off world x
   EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), std::pow(0.2 * std::cos(0.3), 2),
               1e-14);
+
+  // Sec. 2.7.3's hip position: w_position |p_xy - p_xy(initial)|^2, the base point's, whatever
+  // the height; measured from the state the cost was made with.
+  m.weights = CostWeights{};
+  m.weights.position = 400.0;
+  x = x0;
+  x.q.head<3>() += Vector3(0.03, -0.04, 0.2);
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), 400.0 * 0.05 * 0.05, 1e-12);
+  EXPECT_NEAR(StateCost(m, x, config).value(to_vector(x), 0.0), 0.0, 1e-15);
+
+  // Sec. 2.7.3's joint rates: w_joint_velocity |v_joints|^2 over the legs' joints.
+  m.weights = CostWeights{};
+  m.weights.joint_velocity = 0.1;
+  x = x0;
+  x.v.tail<kJoints>() << 1.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0;
+  x.v.head<6>().setConstant(5.0);  // the base's rates are not the joints'
+  EXPECT_NEAR(StateCost(m, x0, config).value(to_vector(x), 0.0), 0.1 * (1.0 + 4.0), 1e-14);
 }
 
 TEST(HumanoidProblem, LegAngleTermsFollowTheirEquations) {
@@ -214,6 +231,24 @@ TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) 
       [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(walking.value(xp, time)); },
       x, walking_gradient);
   EXPECT_LT((walking_lx - walking_gradient.transpose()).norm(), 1e-5 * walking_gradient.norm());
+  // The hip hold adds the horizontal position and the joint rates (columns set exactly).
+  const StateCost hold(test::motion("hip-hold"), x0, config);
+  ASSERT_GT(hold.motion().weights.position * hold.motion().weights.joint_velocity, 0.0);
+  StateVector hold_lx;
+  StateMatrix hold_lxx;
+  hold.derivatives(x, time, hold_lx, hold_lxx);
+  Eigen::Matrix<double, 1, kStateSize> hold_gradient;
+  hmpc::central_difference_jacobian(
+      [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(hold.value(xp, time)); }, x,
+      hold_gradient);
+  EXPECT_LT((hold_lx - hold_gradient.transpose()).norm(), 1e-5 * hold_gradient.norm());
+  // The horizontal position and the joint rates enter their own terms alone.
+  const CostWeights& w = hold.motion().weights;
+  const Vector3 moved = hold.features(to_state(x)).position - hold.features(x0).position;
+  EXPECT_NEAR(hold_lx[0], 2.0 * w.position * moved.x(), 1e-9 * std::abs(hold_lx[0]));
+  EXPECT_NEAR(hold_lx[1], 2.0 * w.position * moved.y(), 1e-9 * std::abs(hold_lx[1]));
+  EXPECT_LT((hold_lx.tail<kJoints>() - 2.0 * w.joint_velocity * x.tail<kJoints>()).norm(),
+            1e-12);
   Eigen::Matrix<double, 1, kStateSize> gradient;
   hmpc::central_difference_jacobian(
       [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(cost.value(xp, time)); }, x,

@@ -28,7 +28,8 @@ const std::map<std::string, std::vector<KeySpec>>& section_keys() {
        {{"w_HAA", 1},     {"w_HFE", 1},     {"w_KFE", 1},   {"w_AFE", 1},          {"w_q1", 1},
         {"w_q2", 1},      {"w_q3", 1},      {"w_q4", 1},    {"w_height", 1},       {"w_vx", 1},
         {"w_vy", 1},      {"w_vz", 1},      {"w_alpha", 1}, {"w_beta", 1},         {"w_omega_x", 1},
-        {"w_omega_y", 1}, {"w_omega_z", 1}, {"w_fast", 1},  {"w_fast_control", 1}, {"w_foot", 1}}},
+        {"w_omega_y", 1}, {"w_omega_z", 1}, {"w_fast", 1},  {"w_fast_control", 1}, {"w_foot", 1},
+        {"w_position", 1, true}, {"w_joint_velocity", 1, true}}},
       {"phase",
        {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}, {"squat", 2, true}}},
       {"reach", {{"target", 3}, {"start", 1}, {"w_reach", 1}, {"w_SFE", 1}}},
@@ -310,6 +311,10 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   weights.fast = reader.weight(w, "w_fast");
   weights.fast_control = reader.weight(w, "w_fast_control");
   weights.foot = reader.weight(w, "w_foot");
+  if (w.entries.count("w_position") != 0) weights.position = reader.weight(w, "w_position");
+  if (w.entries.count("w_joint_velocity") != 0) {
+    weights.joint_velocity = reader.weight(w, "w_joint_velocity");
+  }
 
   if (reach_section != nullptr) {
     const Section& r = *reach_section;
@@ -369,6 +374,8 @@ void write_motion(std::ostream& out, const Motion& motion, const std::string& co
     out << "w_omega_" << axes[i] << " = " << number(w.angular_velocity[i]) << '\n';
   out << "w_fast = " << number(w.fast) << "\nw_fast_control = " << number(w.fast_control)
       << "\nw_foot = " << number(w.foot) << '\n';
+  if (w.position > 0.0) out << "w_position = " << number(w.position) << '\n';
+  if (w.joint_velocity > 0.0) out << "w_joint_velocity = " << number(w.joint_velocity) << '\n';
   for (int k = 0; k < motion.phase_count; ++k) {
     const Phase& p = motion.phases[k];
     out << "\n[phase]\nstart = " << number(p.start) << "\nattitude = " << vector3(p.attitude)

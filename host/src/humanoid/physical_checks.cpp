@@ -14,7 +14,7 @@ constexpr double kStandingHeight = 0.85;     // Table 2.2
 constexpr double kRunningFlight = 0.09;      // [s] in all (physical_checks.hpp)
 constexpr double kJumpFlight = 0.06;         // [s] in one flight phase
 constexpr double kHeightBand = 0.05;
-constexpr double kSquatTolerance = 0.01;  // [m] see physical_checks.hpp
+constexpr double kSquatTolerance = 0.25;  // of the squat's depth, see physical_checks.hpp
 constexpr double kSettle = 0.3;           // [s] the landing/standing window at the end
 constexpr double kPi = 3.14159265358979323846;
 
@@ -199,7 +199,7 @@ bool has_squat(const Motion& motion) {
 
 PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run) {
   if (const std::optional<PhysicalCheck> early = ended_early(run)) return *early;
-  double squared = 0.0, low = 1e9, target_low = 1e9, worst_tilt = 0.0;
+  double squared = 0.0, low = 1e9, target_low = 1e9, worst_tilt = 0.0, depth = 0.0;
   int count = 0, unloaded = 0;
   for (const ClosedLoopSample& s : run.samples) {
     worst_tilt = std::max(worst_tilt, tilt(s));
@@ -210,6 +210,7 @@ PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run) {
     squared += (s.base.position.z() - target) * (s.base.position.z() - target);
     low = std::min(low, s.base.position.z());
     target_low = std::min(target_low, target);
+    depth = std::max(depth, phase.squat_depth);
     ++count;
   }
   PhysicalCheck c;
@@ -218,11 +219,31 @@ PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run) {
     return c;
   }
   const double rms = std::sqrt(squared / count);
-  c.passed = rms <= kSquatTolerance && unloaded == 0 && worst_tilt < 0.3;
+  c.passed = rms <= kSquatTolerance * depth && unloaded == 0 && worst_tilt < 0.3;
   c.verdict = format(
       "base point %.1f mm RMS from the squat's target height (required <= %.0f), down to %.3f m "
       "(target %.3f m); %.0f samples with a foot unloaded (required 0); tilt up to %.2f rad",
-      1e3 * rms, 1e3 * kSquatTolerance, low, target_low, unloaded, worst_tilt);
+      1e3 * rms, 1e3 * kSquatTolerance * depth, low, target_low, unloaded, worst_tilt);
+  return c;
+}
+
+double hip_drift(const ClosedLoopRun& run) {
+  double drift = 0.0;
+  if (run.samples.empty()) return drift;
+  for (const ClosedLoopSample& s : run.samples) {
+    const Eigen::Vector2d from_start = (s.base.position - run.samples.front().base.position).head<2>();
+    drift = std::max(drift, from_start.norm());
+  }
+  return drift;
+}
+
+PhysicalCheck check_hip_hold(const ClosedLoopRun& run) {
+  if (const std::optional<PhysicalCheck> early = ended_early(run)) return *early;
+  PhysicalCheck c = standing(run);
+  const double drift = hip_drift(run);
+  c.passed = c.passed && drift <= kHipHoldTolerance;
+  c.verdict += format("; horizontal drift up to %.1f mm (required <= %.0f)", 1e3 * drift,
+                      1e3 * kHipHoldTolerance);
   return c;
 }
 

@@ -35,6 +35,7 @@ BasicStateCost<A>::BasicStateCost(const Motion& motion, const State& initial,
   const BaseFeatures f = features(initial);
   beta_left_init_ = f.beta_left;
   beta_right_init_ = f.beta_right;
+  position_init_ = f.position.head<2>();
 }
 
 template <int A>
@@ -90,6 +91,11 @@ typename BasicStateCost<A>::CostResidual BasicStateCost<A>::residual(const State
   for (int j = 0; j < 2 * kJointsPerLeg; ++j) {  // joint tracking (CostWeights::joint)
     r[18 + j] = std::sqrt(w.joint) * (x[7 + j] - target.joints[j]);  // q = (p, quaternion, joints)
   }
+  r.template segment<2>(26) =  // the initial hip position (Sec. 2.7.3)
+      std::sqrt(w.position) * (f.position.template head<2>() - position_init_);
+  r.template segment<2 * kJointsPerLeg>(28) =  // the joints' rates (Sec. 2.7.3)
+      std::sqrt(w.joint_velocity) *
+      x.template segment<2 * kJointsPerLeg>(Dimensions<A>::kConfigurationSize + kBaseDofs);
   if constexpr (A == 1) {  // Eq. 2.53, from the reach's start
     const Reach& reach = motion_.reach;
     const double weight = time >= reach.start ? reach.weight : 0.0;
@@ -103,9 +109,15 @@ void BasicStateCost<A>::residual_jacobian(const StateVector& x, double time,
                                           ResidualJacobian& J) const {
   // Central differences (finite_difference.hpp's step) in the entries r depends on: the base
   // height, quaternion and joint angles, and the torso's velocities. The horizontal base
-  // position (it cancels from the leg angles) and the joint rates do not enter, so their
-  // columns are zero.
+  // position enters the held-position rows alone (it cancels from the leg angles), with the
+  // base point moving as the torso origin does, and the leg joints' rates their own rows
+  // alone: those columns are exact. The arm joint's rate does not enter.
   J.setZero();
+  J(26, 0) = J(27, 1) = std::sqrt(motion_.weights.position);
+  for (int j = 0; j < 2 * kJointsPerLeg; ++j) {
+    J(28 + j, Dimensions<A>::kConfigurationSize + kBaseDofs + j) =
+        std::sqrt(motion_.weights.joint_velocity);
+  }
   StateVector xp = x;
   for (int i = 2; i < Dimensions<A>::kConfigurationSize + kBaseDofs; ++i) {
     const double h = detail::fd_step(x[i], 1.0 / 3.0);

@@ -24,6 +24,10 @@
 //              w_omega_x w_omega_y w_omega_z   W_omega of Eq. 4.30
 //              w_fast w_fast_control     lower layer: Eq. 2.52 and its control cost
 //              w_foot                    foot heights (Gait below; not in the thesis)
+//              w_position                (optional, 0 without it) the base point's horizontal
+//                                        position held where the motion starts (Sec. 2.7.3)
+//              w_joint_velocity          (optional, 0 without it) the leg joints' rates
+//                                        (Sec. 2.7.3)
 //   [phase]    start     phase start time [s]; the first phase starts at 0, later ones
 //                        strictly later than the one before
 //              attitude  roll phi, pitch theta, yaw xi [rad]
@@ -40,7 +44,7 @@
 //              start     time the reaching term switches on [s] (>= 0)
 //              w_reach   Eq. 2.53's weight
 //              w_SFE     W_control of Eq. 4.24 for the shoulder joint
-// Every key but model_substep and squat is required exactly once per section; weights are
+// Every key but model_substep, w_position, w_joint_velocity and squat is required exactly once per section; weights are
 // finite and >= 0. Any error throws MotionFileError naming the file, the line and the key.
 #pragma once
 
@@ -61,6 +65,14 @@ struct CostWeights {
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // w_omega_x, _y, _z
   double fast = 0.0, fast_control = 0.0;  // Eq. 2.52 and the deviation nu's weight
   double foot = 0.0;                      // foot heights (Gait)
+  // The base point's horizontal position, held where the problem starts (BasicStateCost's
+  // `initial`): Sec. 2.7.3's real-robot tasks "maintain [the] initial hip position", a position
+  // target, where Sec. 4.3.1's terms hold only the base's height and velocity. Without it
+  // nothing in the cost resists a slow drift the horizon cannot see (motion files' comments).
+  double position = 0.0;
+  // The leg joints' rates, l = w |v_joints|^2: Sec. 2.7.3's state cost minimises "the linear and
+  // angular velocities of the base link and the joints".
+  double joint_velocity = 0.0;
   // Joint-angle tracking, l_joint = w_joint |q_joints - Phase::joints|^2 over the legs' joints:
   // the tracking MPC that reproduces a retargeted demonstration on the robot (Sec. 4.2.1,
   // hmpc/ioc/retargeting.hpp). Not in a motion file (always 0 there).

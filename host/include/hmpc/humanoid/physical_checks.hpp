@@ -19,10 +19,15 @@
 //   VIII  double flip: the torso's pitch integrated over the run at least 4 pi - 0.5 rad (two
 //         full rotations), a flight phase, and an upright landing as for V-VII;
 //   squat (a phase with a sinusoidal height target: Sec. 2.7.3's slow squat): from the squat's
-//         start on, the base point's RMS deviation from the target height at most 1 cm (a
-//         quarter of our 4 cm squat: a robot that stands instead is 2.4 cm off, one lagging by
-//         an eighth of the period 1.1 cm), both feet loaded at every sample (the squat keeps its
-//         soles down) and the torso tilt below 0.3 rad (upright, as a landing);
+//         start on, the base point's RMS deviation from the target height at most a quarter of
+//         the squat's depth (1 cm of our 4 cm squat: a robot that stands instead is 0.61 depths
+//         off, 2.4 cm, one lagging by an eighth of the period 0.27 depths, 1.1 cm), both feet
+//         loaded at every sample (the squat keeps its soles down) and the torso tilt below 0.3
+//         rad (upright, as a landing);
+//   hip hold (Sec. 2.7.3's first task, "maintain [the] initial hip position"): motion I's
+//         standing band, and the base point's horizontal position within 5 cm of where the
+//         first sample has it (the standing band's half-width: a hold is judged in x and y as
+//         standing is in z);
 //   reaching (Sec. 2.6.1, Eq. 2.53; the robot with an arm): the hand's centre within 5 cm of
 //         the target at a sample after the reach starts (5 cm: a hand's half-width, so the
 //         palm touches a ball there).
@@ -50,6 +55,12 @@ PhysicalCheck check_motion(const std::string& numeral, const Motion& motion,
 // Whether `motion` has a squat phase, and its check (above).
 bool has_squat(const Motion& motion);
 PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run);
+
+// The hip hold's check (above), and the largest horizontal distance of the base point from where
+// the run's first sample has it [m] (0 without samples).
+constexpr double kHipHoldTolerance = 0.05;  // [m]
+PhysicalCheck check_hip_hold(const ClosedLoopRun& run);
+double hip_drift(const ClosedLoopRun& run);
 
 // The highest base point of a run [m] (VII against V).
 double apex_height(const ClosedLoopRun& run);

@@ -5,6 +5,8 @@
 //   l(x, u, t) = l_attitude + l_height + l_velocity + l_alpha + l_beta + l_omega   (4.25-4.30)
 //              + tau' W_control tau                                                 (4.24)
 //              + l_foot                     (ours: foot heights, motion.hpp's Gait)
+//              + l_position + l_joint_rates (Sec. 2.7.3: the initial hip position, the joints'
+//                                            rates)
 //              + l_reach                    (Eq. 2.53, the robot with an arm, n = 31)
 // with the targets of the motion phase in force at the step's time (Tables 2.2-2.3), and
 // l_T(x) the same state terms at the end of the horizon.
@@ -121,10 +123,11 @@ struct BaseFeatures {
 
 // Square-root-weighted residuals: 4 attitude, 1 height, 3 velocity, 1 alpha, 2 beta (right,
 // left), 3 angular velocity, 4 foot heights (as BaseFeatures::sole_height; Gait in motion.hpp),
-// 8 leg joint angles (CostWeights::joint, the tracking MPC's), and for the robot with an arm 3
-// for the hand (Eq. 2.53).
+// 8 leg joint angles (CostWeights::joint, the tracking MPC's), 2 for the base point's horizontal
+// position (CostWeights::position), 8 leg joint rates (CostWeights::joint_velocity), and for the
+// robot with an arm 3 for the hand (Eq. 2.53).
 template <int A>
-constexpr int kCostResiduals = 26 + 3 * A;
+constexpr int kCostResiduals = 36 + 3 * A;
 
 // The state cost of Sec. 4.3.1 for one motion. Immutable after construction; every function
 // is safe to call from several threads.
@@ -137,7 +140,7 @@ class BasicStateCost {
   using JointVector = BasicJointVector<ArmJoints>;
   using CostResidual = Eigen::Matrix<double, kCostResiduals<ArmJoints>, 1>;
 
-  // beta^init of Eq. 4.29 is taken from `initial`. Throws std::invalid_argument if the motion
+  // beta^init of Eq. 4.29 and the held horizontal position are taken from `initial`. Throws std::invalid_argument if the motion
   // reaches (Motion::reach) and the robot has no arm, or the other way round.
   BasicStateCost(const Motion& motion, const State& initial, const ProblemConfig& config);
 
@@ -161,6 +164,7 @@ class BasicStateCost {
   std::array<Vector3, 4>
       sole_points_;  // heel and toe edge centres in foot coordinates, as sole_height
   double beta_left_init_ = 0.0, beta_right_init_ = 0.0;
+  Eigen::Vector2d position_init_ = Eigen::Vector2d::Zero();  // base point, world x and y
   BasicDynamics<ArmJoints> dynamics_;  // kinematics only (a const member function)
 };
 
