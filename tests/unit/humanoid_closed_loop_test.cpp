@@ -190,7 +190,7 @@ TEST(HumanoidPhysicalChecks, HipHoldStaysWhereItStarted) {
   EXPECT_NEAR(hip_drift(run), 0.05, 1e-12);
   EXPECT_TRUE(check_hip_hold(run).passed) << check_hip_hold(run).verdict;
   run.samples[60].base.position.head<2>() += Eigen::Vector2d(-0.03, -0.04);
-  for (const Eigen::Vector2d away : {Eigen::Vector2d(0.051, 0.0), Eigen::Vector2d(0.0, -0.051)}) {
+  for (const Eigen::Vector2d& away : {Eigen::Vector2d(0.051, 0.0), Eigen::Vector2d(0.0, -0.051)}) {
     ClosedLoopRun drifted = run;
     drifted.samples[60].base.position.head<2>() += away;
     EXPECT_FALSE(check_hip_hold(drifted).passed) << check_hip_hold(drifted).verdict;

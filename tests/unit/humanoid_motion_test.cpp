@@ -354,7 +354,7 @@ TEST(HumanoidMotion, HipPositionAndJointRateWeightsAreOptional) {
       parse(replace(kValid, "w_foot = 1", "w_foot = 1\nw_position = 400\nw_joint_velocity = 0.1"));
   EXPECT_EQ(held.weights.position, 400.0);
   EXPECT_EQ(held.weights.joint_velocity, 0.1);
-  EXPECT_EQ(load_motion(motion_path("hip-hold")).weights.position, 400.0);
+  EXPECT_EQ(load_motion(motion_path("hip-hold")).weights.position, 2500.0);
   try {
     parse(replace(kValid, "w_foot = 1", "w_foot = 1\nw_position = -1"));
     ADD_FAILURE() << "a negative w_position was accepted";

@@ -107,7 +107,7 @@ struct BasicClosedLoopSample {
   double time = 0.0;           // [s], at the end of the period
   BasicState<A> state;         // simulated, at the end of the period
   BaseFeatures base;           // of `state`
-  BasicJointVector<A> torque;  // the input applied during the period's first 10 ms [N m]
+  BasicJointVector<A> torque;  // the input applied during the period's first fine step [N m]
   // Vertical ground (and seat) force on each foot and on the seat points [N] (left, right,
   // seat), averaged over the period's 1 ms simulator steps (each step's force at its start):
   // what a load cell read at 33 Hz behind an anti-aliasing filter gives. A sample at one
