@@ -282,33 +282,6 @@ TEST(HumanoidProblem, DynamicsIsTheStepMapAndTorquesAreBounded) {
   EXPECT_NEAR(weighted.running_cost(to_vector(x0), u, 0), 3.0 * 100.0 + 4.0 * 1.0, 1e-12);
 }
 
-// Sec. 2.7.3's change of torques: w |u_0 - u_applied|^2 on the first input only, once a torque
-// was applied, with its gradient and Hessian in the running cost's derivatives.
-TEST(HumanoidProblem, TorqueChangeCostsTheFirstInputAgainstTheAppliedTorque) {
-  const ProblemConfig config;
-  const State x0 = standing();
-  Motion m = bare_motion();
-  m.weights = CostWeights{};
-  m.weights.torque_change = 0.5;
-  auto problem = std::make_unique<HumanoidProblem<3>>(m, x0, config);
-  JointVector u = JointVector::Zero();
-  u[1] = 4.0;
-  EXPECT_EQ(problem->running_cost(to_vector(x0), u, 0), 0.0);  // nothing applied yet
-  JointVector applied = JointVector::Zero();
-  applied[1] = 1.0;
-  applied[6] = -2.0;
-  problem->set_applied_torque(applied);
-  EXPECT_NEAR(problem->running_cost(to_vector(x0), u, 0), 0.5 * (9.0 + 4.0), 1e-12);
-  EXPECT_EQ(problem->running_cost(to_vector(x0), u, 1), 0.0);  // later inputs: free
-  HumanoidProblem<3>::RunningDerivatives d;
-  problem->running_cost_derivatives(to_vector(x0), u, 0, d);
-  EXPECT_LT((d.lu - 2.0 * 0.5 * (u - applied)).norm(), 1e-12);
-  EXPECT_LT((d.luu - Eigen::Matrix<double, kJoints, kJoints>::Identity()).norm(), 1e-12);
-  problem->running_cost_derivatives(to_vector(x0), u, 1, d);
-  EXPECT_EQ(d.lu.norm(), 0.0);
-  EXPECT_EQ(d.luu.norm(), 0.0);
-}
-
 // One iLQR solve of a short horizon, with or without a pool.
 struct Solve {
   using Problem = HumanoidProblem<4>;

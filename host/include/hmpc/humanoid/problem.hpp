@@ -4,7 +4,6 @@
 // the cost of Sec. 4.3.1:
 //   l(x, u, t) = l_attitude + l_height + l_velocity + l_alpha + l_beta + l_omega   (4.25-4.30)
 //              + tau' W_control tau                                                 (4.24)
-//              + w_torque_change |tau - tau_applied|^2 at t = 0 only     (Sec. 2.7.3, below)
 //              + l_foot                     (ours: foot heights, motion.hpp's Gait)
 //              + l_position + l_joint_rates (Sec. 2.7.3: the initial hip position, the joints'
 //                                            rates)
@@ -271,17 +270,8 @@ class HumanoidProblem
       this->step_map(t).linearise(to_state<A>(x), u, config_.step, fx, fu);
     }
   }
-  // The torque applied last, for Sec. 2.7.3's change-of-torques cost (CostWeights::
-  // torque_change) on the plan's first input: what the robot receives next, so the applied
-  // torques change smoothly from sample to sample. The plan's later inputs are not tied to
-  // each other: that needs the previous input in the state (n = 37), a dearer backward pass
-  // for inputs nobody applies. Until one is set (a run's first sample) the term is off.
-  void set_applied_torque(const Control& u) {
-    applied_ = u;
-    has_applied_ = true;
-  }
   double running_cost(const State& x, const Control& u, int t) const {
-    return cost_.value(x, time_of(t)) + cost_.control_cost(u) + torque_change_cost(u, t);
+    return cost_.value(x, time_of(t)) + cost_.control_cost(u);
   }
   double terminal_cost(const State& x, int t) const { return cost_.value(x, time_of(t)); }
 
@@ -292,11 +282,6 @@ class HumanoidProblem
     d.lu = 2.0 * w.cwiseProduct(u);
     d.luu = (2.0 * w).asDiagonal();
     d.lux.setZero();
-    if (changes_torque(t)) {
-      const double w_change = cost_.motion().weights.torque_change;
-      d.lu += 2.0 * w_change * (u - applied_);
-      d.luu.diagonal().array() += 2.0 * w_change;
-    }
   }
   void terminal_cost_derivatives(const State& x, int t, TerminalDerivatives& d) const {
     cost_.derivatives(x, time_of(t), d.lx, d.lxx);
@@ -309,20 +294,11 @@ class HumanoidProblem
   State dynamics_in(StepMap& map, const State& x, const Control& u, int) const {
     return to_vector(map.step(to_state<A>(x), u, config_.step));
   }
-  bool changes_torque(int t) const {
-    return t == 0 && has_applied_ && cost_.motion().weights.torque_change > 0.0;
-  }
-  double torque_change_cost(const Control& u, int t) const {
-    return changes_torque(t) ? cost_.motion().weights.torque_change * (u - applied_).squaredNorm()
-                             : 0.0;
-  }
 
   ProblemConfig config_;
   BasicStateCost<ArmJoints> cost_;
   double start_time_ = 0.0;
   Control lower_, upper_;
-  Control applied_ = Control::Zero();
-  bool has_applied_ = false;
 };
 
 // `contact` with the motion's chair, if it has one.
