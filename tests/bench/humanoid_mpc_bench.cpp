@@ -531,16 +531,15 @@ void real_robot(int threads, Linearisation linearisation) {
     for (const ClosedLoopSample& sample : run.samples) solve.push_back(sample.solve_seconds * 1e3);
     std::sort(solve.begin(), solve.end());
     const double p99 = solve.empty() ? 0.0 : solve[(solve.size() * 99) / 100];
-    const PhysicalCheck check = has_squat(motion)                ? check_squat(motion, run)
+    const PhysicalCheck check = has_squat(motion)               ? check_squat(motion, run)
                                 : motion.weights.position > 0.0 ? check_hip_hold(run)
-                                                                 : check_motion("I", motion, run);
+                                                                : check_motion("I", motion, run);
     char over[32], lower[32];
     std::snprintf(over, sizeof over, "%d/%d", s.overruns, s.samples);
     std::snprintf(lower, sizeof lower, "%d/%d", s.lower_layer_acted, s.samples);
     std::printf("%-11s %7d %8.2f %8.2f %8.2f %6.2f %9s %6.2f%% %9s %6.3f %s: %s\n", file.c_str(),
                 s.samples, s.max_solve_ms, s.median_solve_ms, p99, s.mean_iterations, over,
-                s.samples > 0 ? 100.0 * s.overruns / s.samples : 0.0, lower,
-                hip_drift(run),
+                s.samples > 0 ? 100.0 * s.overruns / s.samples : 0.0, lower, hip_drift(run),
                 check.passed ? "check passed" : "check FAILED", check.verdict.c_str());
   }
   std::printf(

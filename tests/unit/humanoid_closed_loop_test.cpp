@@ -170,8 +170,7 @@ TEST(HumanoidPhysicalChecks, SquatFollowsTheTargetHeightOnBothFeet) {
     stepped.samples[200].right_force = 10.0;
     EXPECT_FALSE(check_squat(m, stepped).passed);
     ClosedLoopRun leaned = followed;
-    leaned.samples[100].base.quaternion =
-        Eigen::Vector4d(std::cos(0.16), 0.0, std::sin(0.16), 0.0);
+    leaned.samples[100].base.quaternion = Eigen::Vector4d(std::cos(0.16), 0.0, std::sin(0.16), 0.0);
     EXPECT_FALSE(check_squat(m, leaned).passed);  // 0.32 rad
     ClosedLoopRun early = followed;
     early.samples.resize(20);  // 0.6 s, before the squat starts
@@ -293,12 +292,7 @@ TEST(HumanoidClosedLoop, CoarseFastStandsInTheRealRobotsTiming) {
                                     ProblemConfig{}, 0, kRealRobotTiming);
   EXPECT_EQ(mpc->upper_problem().config().step, 0.012);
   EXPECT_EQ(mpc->fast_subsystem().config().step, 0.006);
-  ClosedLoopConfig config;
-  config.timing = kRealRobotTiming;
-  config.warm_start = false;
-  config.truncate = false;
-  config.duration = 1.2;
-  const ClosedLoopRun r = run_closed_loop(m, config);
+  const ClosedLoopRun r = test::run_in_real_robots_timing(m, 1.2);
   ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
   ASSERT_EQ(r.samples.size(), 100u);
   EXPECT_EQ(r.sampling_period, 0.012);

@@ -84,12 +84,7 @@ TEST(HumanoidMotionChecks, CoarseFastSquatsSlowly) {
 // of where it started.
 TEST(HumanoidMotionChecks, CoarseFastSquatsHoldingTheHipInTheRealRobotsTiming) {
   const Motion m = motion("hip-squat");
-  ClosedLoopConfig config;
-  config.timing = kRealRobotTiming;
-  config.warm_start = false;
-  config.truncate = false;
-  config.duration = 5.0;
-  const ClosedLoopRun r = run_closed_loop(m, config);
+  const ClosedLoopRun r = test::run_in_real_robots_timing(m, 5.0);
   ASSERT_FALSE(r.fell()) << "fell at " << r.fell_at << " s";
   const PhysicalCheck check = check_squat(m, r);
   std::printf("hip squat, Coarse-Fast in the real robot's timing: %s; hip drift %.1f mm\n",

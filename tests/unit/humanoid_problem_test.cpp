@@ -247,8 +247,7 @@ TEST(HumanoidProblem, GaussNewtonGradientIsExactAndHessianPositiveSemidefinite) 
   const Vector3 moved = hold.features(to_state(x)).position - hold.features(x0).position;
   EXPECT_NEAR(hold_lx[0], 2.0 * w.position * moved.x(), 1e-9 * std::abs(hold_lx[0]));
   EXPECT_NEAR(hold_lx[1], 2.0 * w.position * moved.y(), 1e-9 * std::abs(hold_lx[1]));
-  EXPECT_LT((hold_lx.tail<kJoints>() - 2.0 * w.joint_velocity * x.tail<kJoints>()).norm(),
-            1e-12);
+  EXPECT_LT((hold_lx.tail<kJoints>() - 2.0 * w.joint_velocity * x.tail<kJoints>()).norm(), 1e-12);
   Eigen::Matrix<double, 1, kStateSize> gradient;
   hmpc::central_difference_jacobian(
       [&](const StateVector& xp) { return Eigen::Matrix<double, 1, 1>(cost.value(xp, time)); }, x,

@@ -37,4 +37,15 @@ BasicClosedLoopRun<A> run(const Motion& m, MpcKind kind, double duration) {
   return run_closed_loop<A>(m, config);
 }
 
+// The same, Coarse-Fast in the real robot's timing (kRealRobotTiming), cold-started as the
+// thesis ran it (Sec. 2.7.3).
+inline ClosedLoopRun run_in_real_robots_timing(const Motion& m, double duration) {
+  ClosedLoopConfig config;
+  config.timing = kRealRobotTiming;
+  config.warm_start = false;
+  config.truncate = false;
+  config.duration = duration;
+  return run_closed_loop(m, config);
+}
+
 }  // namespace hmpc::humanoid::test

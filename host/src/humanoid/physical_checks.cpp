@@ -231,7 +231,8 @@ double hip_drift(const ClosedLoopRun& run) {
   double drift = 0.0;
   if (run.samples.empty()) return drift;
   for (const ClosedLoopSample& s : run.samples) {
-    const Eigen::Vector2d from_start = (s.base.position - run.samples.front().base.position).head<2>();
+    const Eigen::Vector2d from_start =
+        (s.base.position - run.samples.front().base.position).head<2>();
     drift = std::max(drift, from_start.norm());
   }
   return drift;

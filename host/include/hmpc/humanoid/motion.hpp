@@ -44,8 +44,9 @@
 //              start     time the reaching term switches on [s] (>= 0)
 //              w_reach   Eq. 2.53's weight
 //              w_SFE     W_control of Eq. 4.24 for the shoulder joint
-// Every key but model_substep, w_position, w_joint_velocity and squat is required exactly once per section; weights are
-// finite and >= 0. Any error throws MotionFileError naming the file, the line and the key.
+// Every key but model_substep, w_position, w_joint_velocity and squat is required exactly once per
+// section; weights are finite and >= 0. Any error throws MotionFileError naming the file, the line
+// and the key.
 #pragma once
 
 #include <Eigen/Core>

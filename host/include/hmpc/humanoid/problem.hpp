@@ -140,8 +140,9 @@ class BasicStateCost {
   using JointVector = BasicJointVector<ArmJoints>;
   using CostResidual = Eigen::Matrix<double, kCostResiduals<ArmJoints>, 1>;
 
-  // beta^init of Eq. 4.29 and the held horizontal position are taken from `initial`. Throws std::invalid_argument if the motion
-  // reaches (Motion::reach) and the robot has no arm, or the other way round.
+  // beta^init of Eq. 4.29 and the held horizontal position are taken from `initial`. Throws
+  // std::invalid_argument if the motion reaches (Motion::reach) and the robot has no arm, or the
+  // other way round.
   BasicStateCost(const Motion& motion, const State& initial, const ProblemConfig& config);
 
   const Motion& motion() const { return motion_; }
