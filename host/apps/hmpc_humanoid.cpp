@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -105,19 +106,9 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
     std::printf("physical check of reaching: %s: %s\n", check.passed ? "PASSED" : "FAILED",
                 check.verdict.c_str());
   } else {
-    const std::string numeral = motion_numeral(stem);
-    if (!numeral.empty()) {
-      const PhysicalCheck check = check_motion(numeral, motion, run);
-      std::printf("physical check of motion %s: %s: %s\n", numeral.c_str(),
-                  check.passed ? "PASSED" : "FAILED", check.verdict.c_str());
-    } else if (has_squat(motion)) {
-      const PhysicalCheck check = check_squat(motion, run);
-      std::printf("physical check of the squat: %s: %s\n", check.passed ? "PASSED" : "FAILED",
-                  check.verdict.c_str());
-    } else if (motion.weights.position > 0.0) {
-      const PhysicalCheck check = check_hip_hold(run);
-      std::printf("physical check of the hip hold: %s: %s\n", check.passed ? "PASSED" : "FAILED",
-                  check.verdict.c_str());
+    if (const std::optional<MotionCheck> c = check_for(stem, motion, run)) {
+      std::printf("physical check of %s: %s: %s\n", c->what.c_str(),
+                  c->check.passed ? "PASSED" : "FAILED", c->check.verdict.c_str());
     }
   }
   const std::string title = stem + ", " + name_of(config.mpc) + " MPC";

@@ -531,9 +531,8 @@ void real_robot(int threads, Linearisation linearisation) {
     for (const ClosedLoopSample& sample : run.samples) solve.push_back(sample.solve_seconds * 1e3);
     std::sort(solve.begin(), solve.end());
     const double p99 = solve.empty() ? 0.0 : solve[(solve.size() * 99) / 100];
-    const PhysicalCheck check = has_squat(motion)               ? check_squat(motion, run)
-                                : motion.weights.position > 0.0 ? check_hip_hold(run)
-                                                                : check_motion("I", motion, run);
+    const PhysicalCheck check =
+        check_for(file, motion, run).value().check;  // each of the four has one
     char over[32], lower[32];
     std::snprintf(over, sizeof over, "%d/%d", s.overruns, s.samples);
     std::snprintf(lower, sizeof lower, "%d/%d", s.lower_layer_acted, s.samples);

@@ -257,6 +257,15 @@ std::string motion_numeral(const std::string& name) {
   return {};
 }
 
+std::optional<MotionCheck> check_for(const std::string& name, const Motion& motion,
+                                     const ClosedLoopRun& run) {
+  const std::string numeral = motion_numeral(name);
+  if (!numeral.empty()) return MotionCheck{"motion " + numeral, check_motion(numeral, motion, run)};
+  if (has_squat(motion)) return MotionCheck{"the squat", check_squat(motion, run)};
+  if (motion.weights.position > 0.0) return MotionCheck{"the hip hold", check_hip_hold(run)};
+  return std::nullopt;
+}
+
 double apex_height(const ClosedLoopRun& run) {
   double apex = -1e9;
   for (const ClosedLoopSample& s : run.samples) apex = std::max(apex, s.base.position.z());

@@ -68,8 +68,8 @@ struct CostWeights {
   double foot = 0.0;                      // foot heights (Gait)
   // The base point's horizontal position, held where the problem starts (BasicStateCost's
   // `initial`): Sec. 2.7.3's real-robot tasks "maintain [the] initial hip position", a position
-  // target, where Sec. 4.3.1's terms hold only the base's height and velocity. Without it
-  // nothing in the cost resists a slow drift the horizon cannot see (motion files' comments).
+  // target, where Sec. 4.3.1's terms hold only the base's height and velocity, so nothing else
+  // holds the hip where it was.
   double position = 0.0;
   // The leg joints' rates, l = w |v_joints|^2: Sec. 2.7.3's state cost minimises "the linear and
   // angular velocities of the base link and the joints".

@@ -34,6 +34,7 @@
 // Every motion also must not have fallen (closed_loop.hpp's fallen_clearance).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "hmpc/humanoid/closed_loop.hpp"
@@ -61,6 +62,17 @@ PhysicalCheck check_squat(const Motion& motion, const ClosedLoopRun& run);
 constexpr double kHipHoldTolerance = 0.05;  // [m]
 PhysicalCheck check_hip_hold(const ClosedLoopRun& run);
 double hip_drift(const ClosedLoopRun& run);
+
+// The check a motion file's run gets: its numeral's (check_motion), else the squat's, else the
+// hip hold's (a motion with CostWeights::position); none for other motions. `name` is the
+// file's name, as motion_numeral takes it; `what` names the check for a report ("motion I",
+// "the squat", "the hip hold").
+struct MotionCheck {
+  std::string what;
+  PhysicalCheck check;
+};
+std::optional<MotionCheck> check_for(const std::string& name, const Motion& motion,
+                                     const ClosedLoopRun& run);
 
 // The highest base point of a run [m] (VII against V).
 double apex_height(const ClosedLoopRun& run);
