@@ -78,6 +78,8 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
       run.sampling_period * 1e3, s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated,
       run.sampling_period * 1e3, s.overruns, s.unusable, run.samples.size());
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
+  std::printf("applied torque's change per sample: RMS %.3f N m, largest %.2f N m\n",
+              s.torque_change_rms, s.torque_change_max);
   if (config.mpc == MpcKind::kCoarseFast) {
     std::printf(
         "lower layer changed an applied torque by over %.0f %% of its limit in %d of %d "

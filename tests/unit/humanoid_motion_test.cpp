@@ -127,6 +127,7 @@ void expect_same_motion(const Motion& a, const Motion& b) {
   EXPECT_EQ(u.foot, v.foot);
   EXPECT_EQ(u.position, v.position);
   EXPECT_EQ(u.joint_velocity, v.joint_velocity);
+  EXPECT_EQ(u.torque_change, v.torque_change);
   EXPECT_EQ(a.reach.active, b.reach.active);
   EXPECT_EQ(a.reach.target, b.reach.target);
   EXPECT_EQ(a.reach.start, b.reach.start);
@@ -346,21 +347,27 @@ TEST(HumanoidMotion, ModelSubstepIsOptionalAndReachesTheMpcModel) {
 
 // Sec. 2.7.3's two terms are optional weights: 0 left out (every motion of Tables 2.2-2.3),
 // read when given, and checked as every weight is.
-TEST(HumanoidMotion, HipPositionAndJointRateWeightsAreOptional) {
+TEST(HumanoidMotion, Sec273WeightsAreOptional) {
   const Motion plain = parse(kValid);
   EXPECT_EQ(plain.weights.position, 0.0);
   EXPECT_EQ(plain.weights.joint_velocity, 0.0);
-  const Motion held =
-      parse(replace(kValid, "w_foot = 1", "w_foot = 1\nw_position = 400\nw_joint_velocity = 0.1"));
+  EXPECT_EQ(plain.weights.torque_change, 0.0);
+  const Motion held = parse(replace(
+      kValid, "w_foot = 1",
+      "w_foot = 1\nw_position = 400\nw_joint_velocity = 0.1\nw_torque_change = 0.02"));
   EXPECT_EQ(held.weights.position, 400.0);
   EXPECT_EQ(held.weights.joint_velocity, 0.1);
+  EXPECT_EQ(held.weights.torque_change, 0.02);
   EXPECT_EQ(load_motion(motion_path("hip-hold")).weights.position, 2500.0);
-  try {
-    parse(replace(kValid, "w_foot = 1", "w_foot = 1\nw_position = -1"));
-    ADD_FAILURE() << "a negative w_position was accepted";
-  } catch (const MotionFileError& e) {
-    EXPECT_NE(std::string(e.what()).find("w_position: a weight must be >= 0"), std::string::npos)
-        << e.what();
+  EXPECT_EQ(load_motion(motion_path("hip-squat")).weights.torque_change, 0.01);
+  for (const std::string key : {"w_position", "w_torque_change"}) {
+    try {
+      parse(replace(kValid, "w_foot = 1", "w_foot = 1\n" + key + " = -1"));
+      ADD_FAILURE() << "a negative " << key << " was accepted";
+    } catch (const MotionFileError& e) {
+      EXPECT_NE(std::string(e.what()).find(key + ": a weight must be >= 0"), std::string::npos)
+          << e.what();
+    }
   }
 }
 

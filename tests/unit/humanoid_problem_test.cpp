@@ -281,6 +281,27 @@ TEST(HumanoidProblem, DynamicsIsTheStepMapAndTorquesAreBounded) {
   EXPECT_NEAR(weighted.running_cost(to_vector(x0), u, 0), 3.0 * 100.0 + 4.0 * 1.0, 1e-12);
 }
 
+// Sec. 2.7.3's change of torques is the iLQR's change penalty (problem.hpp), against the torque
+// applied last, off until one is set.
+TEST(HumanoidProblem, TorqueChangeIsTheSolversChangePenaltyAgainstTheAppliedTorque) {
+  const State x0 = standing();
+  Motion m = bare_motion();
+  m.weights.torque_change = 0.5;
+  auto problem = std::make_unique<HumanoidProblem<3>>(m, x0, ProblemConfig{});
+  EXPECT_EQ(problem->control_change_weight(), JointVector::Zero()) << "nothing applied yet";
+  JointVector applied = JointVector::Zero();
+  applied[1] = 1.0;
+  applied[6] = -2.0;
+  problem->set_applied_torque(applied);
+  EXPECT_EQ(problem->control_change_weight(), JointVector::Constant(0.5));
+  EXPECT_EQ(problem->previous_control(), applied);
+  const auto plain = std::make_unique<HumanoidProblem<3>>(bare_motion(), x0, ProblemConfig{});
+  JointVector u = JointVector::Zero();
+  u[1] = 4.0;
+  EXPECT_EQ(problem->running_cost(to_vector(x0), u, 0), plain->running_cost(to_vector(x0), u, 0))
+      << "the solver adds the term, not the running cost";
+}
+
 // One iLQR solve of a short horizon, with or without a pool.
 struct Solve {
   using Problem = HumanoidProblem<4>;

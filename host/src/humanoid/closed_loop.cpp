@@ -104,8 +104,15 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   std::vector<double> solve;
   solve.reserve(run.samples.size());
   s.min_height = s.max_height = run.samples.front().base.position.z();
-  double iterations = 0.0;
+  double iterations = 0.0, change2 = 0.0;
+  const BasicJointVector<A>* before = nullptr;
   for (const BasicClosedLoopSample<A>& sample : run.samples) {
+    if (before != nullptr) {
+      const BasicJointVector<A> change = sample.torque - *before;
+      change2 += change.squaredNorm();
+      s.torque_change_max = std::max(s.torque_change_max, change.cwiseAbs().maxCoeff());
+    }
+    before = &sample.torque;
     solve.push_back(sample.solve_seconds * 1e3);
     iterations += sample.iterations;
     s.truncated += sample.truncated ? 1 : 0;
@@ -120,6 +127,10 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   s.max_solve_ms = solve.back();
   s.median_solve_ms = solve[solve.size() / 2];
   s.mean_iterations = iterations / static_cast<double>(run.samples.size());
+  if (run.samples.size() > 1) {
+    s.torque_change_rms = std::sqrt(
+        change2 / static_cast<double>((run.samples.size() - 1) * run.samples.front().torque.size()));
+  }
   return s;
 }
 

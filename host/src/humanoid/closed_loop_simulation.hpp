@@ -285,6 +285,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
   }
   State x = initial;
   LayerTimes times;
+  BasicJointVector<A> applied;  // the torque of the period's last fine step
   for (int k = 0; k < count; ++k) {
     const double t0 = k * sampling_period;
     BasicClosedLoopSample<A> sample;
@@ -294,11 +295,13 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
       break;
     }
     problem_of(mpc).set_start_time(t0);
+    if (k > 0) problem_of(mpc).set_applied_torque(applied);
     const auto start = Clock::now();
     update(mpc, sample.feedback, start, sampling_period, config.truncate, times);
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     sample.truncated = stopped_early(mpc);
     sample.torque = mpc.planned_control(0);
+    applied = mpc.planned_control(fine_steps - 1);
     for (int j = 0; j < fine_steps; ++j) {
       const BasicJointVector<A> u = mpc.planned_control(j);
       for (int i = 0; i < simulator_steps; ++i) {

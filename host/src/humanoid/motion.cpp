@@ -46,7 +46,8 @@ const std::map<std::string, std::vector<KeySpec>>& section_keys() {
         {"w_fast_control", 1},
         {"w_foot", 1},
         {"w_position", 1, true},
-        {"w_joint_velocity", 1, true}}},
+        {"w_joint_velocity", 1, true},
+        {"w_torque_change", 1, true}}},
       {"phase",
        {{"start", 1}, {"attitude", 3}, {"height", 1}, {"velocity", 3}, {"squat", 2, true}}},
       {"reach", {{"target", 3}, {"start", 1}, {"w_reach", 1}, {"w_SFE", 1}}},
@@ -332,6 +333,9 @@ Motion parse_motion(std::istream& in, const std::string& source) {
   if (w.entries.count("w_joint_velocity") != 0) {
     weights.joint_velocity = reader.weight(w, "w_joint_velocity");
   }
+  if (w.entries.count("w_torque_change") != 0) {
+    weights.torque_change = reader.weight(w, "w_torque_change");
+  }
 
   if (reach_section != nullptr) {
     const Section& r = *reach_section;
@@ -393,6 +397,7 @@ void write_motion(std::ostream& out, const Motion& motion, const std::string& co
       << "\nw_foot = " << number(w.foot) << '\n';
   if (w.position > 0.0) out << "w_position = " << number(w.position) << '\n';
   if (w.joint_velocity > 0.0) out << "w_joint_velocity = " << number(w.joint_velocity) << '\n';
+  if (w.torque_change > 0.0) out << "w_torque_change = " << number(w.torque_change) << '\n';
   for (int k = 0; k < motion.phase_count; ++k) {
     const Phase& p = motion.phases[k];
     out << "\n[phase]\nstart = " << number(p.start) << "\nattitude = " << vector3(p.attitude)

@@ -10,6 +10,12 @@
 // the feedforward term, and box limits on the controls handled as in box-DDP (a projected-
 // Newton QP per step, clamped directions removed from the feedback gain).
 //
+// A penalty on the change of the inputs (problem.hpp's control_change_weight), which ties each
+// input to the one before, is solved exactly as DDP on the state augmented with the previous
+// input, z_t = (x_t, p_t), p_t = u_{t-1}, p_{t+1} = u_t, without storing the augmented Jacobians:
+// the value function gains the terms V_p, V_pp, V_xp and the policy a feedback K_p on the
+// previous input's deviation (see backward_pass).
+//
 // Horizon convention: N control intervals, so N controls u_0..u_{N-1} and N+1 states
 // x_0..x_N, as in the sums of Eqs. 2.38-2.40.
 //
@@ -36,7 +42,7 @@ enum class SolveStatus : std::uint8_t {
   kIterationCap,      // config.max_iterations reached
   kBudgetExhausted,   // the caller's iteration budget ran out or its stop predicate fired
   kStalled,           // regularisation reached its maximum without finding a descent step
-  kInvalidInput,      // non-finite initial state: previous plan kept untouched
+  kInvalidInput,      // non-finite x0, bad change penalty: previous plan kept untouched
   kNumericalFailure,  // the model produced non-finite values even from safe controls
 };
 
@@ -168,6 +174,7 @@ class Ilqr {
     for (auto& x : x_) x.setZero();
     for (auto& k : k_) k.setZero();
     for (auto& K : K_) K.setZero();
+    for (auto& Kp : Kp_) Kp.setZero();
     mu_ = config_.regularization_init;
     dmu_ = Scalar(1);
     cost_ = std::numeric_limits<Scalar>::infinity();
@@ -215,6 +222,15 @@ class Ilqr {
     Result result;
     work_ = SolveWork{};
     if (!x0.allFinite()) {
+      result.status = SolveStatus::kInvalidInput;
+      result.cost = result.initial_cost = std::numeric_limits<Scalar>::quiet_NaN();
+      return result;
+    }
+    change_weight_ = problem.control_change_weight();
+    previous_ = problem.previous_control();
+    changes_ = (change_weight_.array() > Scalar(0)).any();
+    if (!change_weight_.allFinite() || (change_weight_.array() < Scalar(0)).any() ||
+        (changes_ && !previous_.allFinite())) {
       result.status = SolveStatus::kInvalidInput;
       result.cost = result.initial_cost = std::numeric_limits<Scalar>::quiet_NaN();
       return result;
@@ -385,6 +401,12 @@ class Ilqr {
     Scalar cost = 0;
     for (int t = 0; t < N; ++t) cost += problem.running_cost(x[t], u[t], t);
     cost += problem.terminal_cost(x[N], N);
+    if (changes_) {
+      for (int t = 0; t < N; ++t) {
+        const Control change = u[t] - (t > 0 ? u[t - 1] : previous_);
+        cost += change.dot(change_weight_.cwiseProduct(change));
+      }
+    }
     return std::isfinite(cost) ? cost : std::numeric_limits<Scalar>::infinity();
   }
 
@@ -409,7 +431,9 @@ class Ilqr {
     lane_steps_[lane] = 0;
     x[0] = x0;
     for (int t = 0; t < N; ++t) {
-      u[t] = clamp(u_[t] + alpha * k_[t] + K_[t] * (x[t] - x_[t]), t);
+      Control ut = u_[t] + alpha * k_[t] + K_[t] * (x[t] - x_[t]);
+      if (changes_ && t > 0) ut += Kp_[t] * (u[t - 1] - u_[t - 1]);  // dp_0 = 0: u_{-1} is given
+      u[t] = clamp(ut, t);
       x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, lane);
       if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
     }
@@ -446,17 +470,38 @@ class Ilqr {
     expected_quadratic = 0;
     State Vx = terminal_.lx;  // V_N = l_T (text after Eq. 2.16)
     StateJacobian Vxx = terminal_.lxx;
+    // The value function's terms in the previous input p (a change penalty only): V_N has none.
+    Control Vp = Control::Zero();
+    ControlMatrix Vpp = ControlMatrix::Zero();
+    ControlJacobian Vxp = ControlJacobian::Zero();
     for (int t = N - 1; t >= 0; --t) {
       ++work_.backward_steps;
       const StateJacobian& A = fx_[t];
       const ControlJacobian& B = fu_[t];
       const RunningDerivatives& l = running_[t];
       const Eigen::Matrix<Scalar, kStateDim, kControlDim> VxxB = Vxx * B;
-      const State Qx = l.lx + A.transpose() * Vx;                           // Eq. 2.7
-      const Control Qu = l.lu + B.transpose() * Vx;                         // Eq. 2.8
-      const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;            // Eq. 2.9
-      const Gain Qux = l.lux + VxxB.transpose() * A;                        // Eq. 2.10
-      const ControlMatrix Quu = l.luu + B.transpose() * VxxB;               // Eq. 2.11
+      const State Qx = l.lx + A.transpose() * Vx;                // Eq. 2.7
+      Control Qu = l.lu + B.transpose() * Vx;                    // Eq. 2.8
+      const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;  // Eq. 2.9
+      Gain Qux = l.lux + VxxB.transpose() * A;                   // Eq. 2.10
+      ControlMatrix Quu = l.luu + B.transpose() * VxxB;          // Eq. 2.11
+      // The change penalty c = (u - p)' W (u - p) and p' = u: c_u = 2W(u - p) = -c_p,
+      // c_uu = c_pp = 2W = -c_up; the next value's p-terms enter through du as they would
+      // through a Jacobian [B; I]. Nothing in x's rows changes: p' and c do not depend on x.
+      Control Qp = Control::Zero();
+      ControlMatrix Qpp = ControlMatrix::Zero();
+      ControlMatrix Qup = ControlMatrix::Zero();
+      if (changes_) {
+        const Control two_w = Scalar(2) * change_weight_;
+        const Control change = u_[t] - (t > 0 ? u_[t - 1] : previous_);
+        const ControlMatrix BtVxp = B.transpose() * Vxp;
+        Qu += two_w.cwiseProduct(change) + Vp;
+        Qux += Vxp.transpose() * A;
+        Quu += ControlMatrix(two_w.asDiagonal()) + BtVxp + BtVxp.transpose() + Vpp;
+        Qp = -two_w.cwiseProduct(change);
+        Qpp = two_w.asDiagonal();
+        Qup = -Qpp;
+      }
       const ControlMatrix Quu_reg = Quu + mu_ * ControlMatrix::Identity();  // LM term
 
       if (bounded_) {
@@ -467,11 +512,16 @@ class Ilqr {
         k_[t] = box_.x;
         for (int j = 0; j < kStateDim; ++j)
           K_[t].col(j) = -box_.free_factor.solve(Qux.col(j).cwiseProduct(box_.free_mask));
+        if (changes_) {
+          for (int j = 0; j < kControlDim; ++j)
+            Kp_[t].col(j) = -box_.free_factor.solve(Qup.col(j).cwiseProduct(box_.free_mask));
+        }
       } else {
         llt_.compute(Quu_reg);
         if (llt_.info() != Eigen::Success) return false;
         k_[t] = -llt_.solve(Qu);  // Eq. 2.12
         for (int j = 0; j < kStateDim; ++j) K_[t].col(j) = -llt_.solve(Qux.col(j));
+        if (changes_) Kp_[t] = -llt_.solve(Qup);
       }
       const Control& k = k_[t];
       const Gain& K = K_[t];
@@ -484,6 +534,15 @@ class Ilqr {
       Vx = Qx + K.transpose() * (Quu * k) + K.transpose() * Qu + Qux.transpose() * k;
       Vxx = Qxx + K.transpose() * Quu * K + K.transpose() * Qux + Qux.transpose() * K;
       Vxx = Scalar(0.5) * (Vxx + Vxx.transpose()).eval();
+      if (changes_) {
+        // The same formula on the augmented state's p rows, with Q_xp = 0.
+        const ControlMatrix& Kp = Kp_[t];
+        if (!Kp.allFinite()) return false;
+        Vp = Qp + Kp.transpose() * (Quu * k) + Kp.transpose() * Qu + Qup.transpose() * k;
+        Vpp = Qpp + Kp.transpose() * Quu * Kp + Kp.transpose() * Qup + Qup.transpose() * Kp;
+        Vpp = Scalar(0.5) * (Vpp + Vpp.transpose()).eval();
+        Vxp = K.transpose() * Quu * Kp + K.transpose() * Qup + Qux.transpose() * Kp;
+      }
     }
     return true;
   }
@@ -516,6 +575,9 @@ class Ilqr {
   std::array<Control, N> lower_{};  // box limits per step, read from the problem each solve
   std::array<Control, N> upper_{};
   bool bounded_ = false;
+  Control change_weight_ = Control::Zero();  // read from the problem each solve
+  Control previous_ = Control::Zero();       // u_{-1}
+  bool changes_ = false;
   Scalar mu_ = 0;
   Scalar dmu_ = 1;
   Scalar cost_ = 0;
@@ -530,6 +592,7 @@ class Ilqr {
   std::array<std::int32_t, kLanes> lane_steps_{};  // rollout steps each lane completed
   std::array<Control, N> k_;                       // feedforward, Eq. 2.12
   GainTrajectory K_;                               // feedback, Eq. 2.12
+  std::array<ControlMatrix, N> Kp_;                // feedback on u_{t-1}'s deviation
   std::array<StateJacobian, N> fx_;
   std::array<ControlJacobian, N> fu_;
   std::array<RunningDerivatives, N> running_;

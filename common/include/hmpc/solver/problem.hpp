@@ -8,6 +8,10 @@
 // and may define, by hiding the defaults below,
 //   dynamics_derivatives, running_cost_derivatives, terminal_cost_derivatives (analytic),
 //   control_lower_bound(t), control_upper_bound(t) (box limits at step t; default: none),
+//   control_change_weight() and previous_control() (a penalty on the change of the inputs,
+//   sum_t (u_t - u_{t-1})' diag(w) (u_t - u_{t-1}) with u_{-1} = previous_control(), the input
+//   applied last; it ties consecutive steps, so the solver adds it itself, exactly (ilqr.hpp);
+//   default: w = 0, off),
 //   for_each_step(count, linearize) (how the solver's N independent per-step linearisations
 //   run; default: in order on the calling thread. A host problem may spread them over
 //   threads: each call linearize(t) writes only step t's outputs, and the problem's
@@ -107,6 +111,9 @@ class ProblemBase {
   void for_each_rollout(int count, const LaneFunction& rollout) const {
     for (int lane = 0; lane < count; ++lane) rollout(lane);
   }
+
+  Control control_change_weight() const { return Control::Zero(); }
+  Control previous_control() const { return Control::Zero(); }
 
   Control control_lower_bound(int) const {
     return Control::Constant(-std::numeric_limits<Scalar>::infinity());

@@ -175,6 +175,10 @@ struct ClosedLoopSummary {
   // Samples where the lower layer changed an applied input by more than kLowerLayerActs of its
   // joint's torque limit.
   int lower_layer_acted = 0;
+  // How smoothly the applied torques change (Sec. 2.7.3's concern: "sudden jumps in the control
+  // inputs can cause undesired oscillations"): the change of each joint's torque from one
+  // sample to the next (ClosedLoopSample::torque), RMS over joints and samples and largest [N m].
+  double torque_change_rms = 0.0, torque_change_max = 0.0;
   double total_cost = 0.0;
   double min_height = 0.0, max_height = 0.0;
 };

@@ -28,6 +28,8 @@
 //                                        position held where the motion starts (Sec. 2.7.3)
 //              w_joint_velocity          (optional, 0 without it) the leg joints' rates
 //                                        (Sec. 2.7.3)
+//              w_torque_change           (optional, 0 without it) the change of the torques
+//                                        from one input to the next (Sec. 2.7.3)
 //   [phase]    start     phase start time [s]; the first phase starts at 0, later ones
 //                        strictly later than the one before
 //              attitude  roll phi, pitch theta, yaw xi [rad]
@@ -44,9 +46,9 @@
 //              start     time the reaching term switches on [s] (>= 0)
 //              w_reach   Eq. 2.53's weight
 //              w_SFE     W_control of Eq. 4.24 for the shoulder joint
-// Every key but model_substep, w_position, w_joint_velocity and squat is required exactly once per
-// section; weights are finite and >= 0. Any error throws MotionFileError naming the file, the line
-// and the key.
+// Every key but model_substep, w_position, w_joint_velocity, w_torque_change and squat is
+// required exactly once per section; weights are finite and >= 0. Any error throws
+// MotionFileError naming the file, the line and the key.
 #pragma once
 
 #include <Eigen/Core>
@@ -74,6 +76,10 @@ struct CostWeights {
   // The leg joints' rates, l = w |v_joints|^2: Sec. 2.7.3's state cost minimises "the linear and
   // angular velocities of the base link and the joints".
   double joint_velocity = 0.0;
+  // The change of the torques, w |u_k - u_{k-1}|^2 over the plan with u_{-1} the torque applied
+  // last (HumanoidProblem::set_applied_torque): Sec. 2.7.3's second control cost, "since sudden
+  // jumps in the control inputs can cause undesired oscillations".
+  double torque_change = 0.0;
   // Joint-angle tracking, l_joint = w_joint |q_joints - Phase::joints|^2 over the legs' joints:
   // the tracking MPC that reproduces a retargeted demonstration on the robot (Sec. 4.2.1,
   // hmpc/ioc/retargeting.hpp). Not in a motion file (always 0 there).

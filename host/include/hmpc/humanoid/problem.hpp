@@ -4,6 +4,8 @@
 // the cost of Sec. 4.3.1:
 //   l(x, u, t) = l_attitude + l_height + l_velocity + l_alpha + l_beta + l_omega   (4.25-4.30)
 //              + tau' W_control tau                                                 (4.24)
+//              + w_torque_change |tau_k - tau_{k-1}|^2, tau_{-1} the torque applied last
+//                                           (Sec. 2.7.3; a term the iLQR adds, see below)
 //              + l_foot                     (ours: foot heights, motion.hpp's Gait)
 //              + l_position + l_joint_rates (Sec. 2.7.3: the initial hip position, the joints'
 //                                            rates)
@@ -291,6 +293,19 @@ class HumanoidProblem
   Control control_lower_bound(int) const { return lower_; }
   Control control_upper_bound(int) const { return upper_; }
 
+  // Sec. 2.7.3's change of torques (CostWeights::torque_change): it ties each input to the one
+  // before, so the iLQR adds it to the cost itself (problem.hpp's control_change_weight), on
+  // the whole plan and against the torque applied last, which the caller sets before each
+  // solve. Until one is set (a run's first sample) the term is off.
+  void set_applied_torque(const Control& u) {
+    applied_ = u;
+    has_applied_ = true;
+  }
+  Control control_change_weight() const {
+    return Control::Constant(has_applied_ ? cost_.motion().weights.torque_change : 0.0);
+  }
+  Control previous_control() const { return applied_; }
+
  private:
   State dynamics_in(StepMap& map, const State& x, const Control& u, int) const {
     return to_vector(map.step(to_state<A>(x), u, config_.step));
@@ -300,6 +315,8 @@ class HumanoidProblem
   BasicStateCost<ArmJoints> cost_;
   double start_time_ = 0.0;
   Control lower_, upper_;
+  Control applied_ = Control::Zero();
+  bool has_applied_ = false;
 };
 
 // `contact` with the motion's chair, if it has one.
