@@ -512,9 +512,9 @@ void real_robot(int threads, Linearisation linearisation) {
       "%.0f s\n",
       kCoarseHorizon, kFastHorizon, kIterationCap, kTolerance, threads, threads == 1 ? "" : "s",
       name_of(linearisation), kSeconds);
-  std::printf("%-11s %7s %8s %8s %8s %6s %9s %7s %9s %6s %7s %s\n", "motion", "solves",
-              "max [ms]", "med [ms]", "p99 [ms]", "iters", ">12 ms", "share", "lower", "drift",
-              "dtau", "outcome");
+  std::printf("%-11s %7s %8s %8s %8s %6s %9s %7s %9s %6s %7s %s\n", "motion", "solves", "max [ms]",
+              "med [ms]", "p99 [ms]", "iters", ">12 ms", "share", "lower", "drift", "dtau",
+              "outcome");
   for (const std::string file : {"hip-hold", "hip-squat", "I-standing", "slow-squat"}) {
     const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
     ClosedLoopConfig config;

@@ -107,9 +107,10 @@ TEST(HumanoidMotionChecks, ChangeOfTorquesSmoothsTheHipSquatsTorques) {
   const ClosedLoopRun without = test::run_in_real_robots_timing(free, 5.0);
   const double rms_with = summarise(with).torque_change_rms;
   const double rms_without = summarise(without).torque_change_rms;
-  std::printf("hip squat, applied torques' RMS change per 12 ms sample: %.3f N m with the "
-              "change-of-torques term, %.3f without\n",
-              rms_with, rms_without);
+  std::printf(
+      "hip squat, applied torques' RMS change per 12 ms sample: %.3f N m with the "
+      "change-of-torques term, %.3f without\n",
+      rms_with, rms_without);
   EXPECT_FALSE(with.fell());
   EXPECT_FALSE(without.fell());
   EXPECT_LT(rms_with, 0.75 * rms_without);

@@ -352,9 +352,9 @@ TEST(HumanoidMotion, Sec273WeightsAreOptional) {
   EXPECT_EQ(plain.weights.position, 0.0);
   EXPECT_EQ(plain.weights.joint_velocity, 0.0);
   EXPECT_EQ(plain.weights.torque_change, 0.0);
-  const Motion held = parse(replace(
-      kValid, "w_foot = 1",
-      "w_foot = 1\nw_position = 400\nw_joint_velocity = 0.1\nw_torque_change = 0.02"));
+  const Motion held = parse(
+      replace(kValid, "w_foot = 1",
+              "w_foot = 1\nw_position = 400\nw_joint_velocity = 0.1\nw_torque_change = 0.02"));
   EXPECT_EQ(held.weights.position, 400.0);
   EXPECT_EQ(held.weights.joint_velocity, 0.1);
   EXPECT_EQ(held.weights.torque_change, 0.02);

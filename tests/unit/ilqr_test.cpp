@@ -624,8 +624,8 @@ class AugmentedPendulum : public hmpc::ProblemBase<AugmentedPendulum, double, 3,
   }
   void dynamics_derivatives(const State& x, const Control&, int, StateJacobian& fx,
                             ControlJacobian& fu) const {
-    fx << 1.0, P::kDt, 0.0, -P::kDt * P::kG * std::cos(x(0)), 1.0 - P::kDt * P::kB, 0.0, 0.0,
-        0.0, 0.0;
+    fx << 1.0, P::kDt, 0.0, -P::kDt * P::kG * std::cos(x(0)), 1.0 - P::kDt * P::kB, 0.0, 0.0, 0.0,
+        0.0;
     fu << 0.0, P::kDt, 1.0;
   }
   double running_cost(const State& x, const Control& u, int) const {

@@ -128,8 +128,9 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   s.median_solve_ms = solve[solve.size() / 2];
   s.mean_iterations = iterations / static_cast<double>(run.samples.size());
   if (run.samples.size() > 1) {
-    s.torque_change_rms = std::sqrt(
-        change2 / static_cast<double>((run.samples.size() - 1) * run.samples.front().torque.size()));
+    s.torque_change_rms =
+        std::sqrt(change2 / static_cast<double>((run.samples.size() - 1) *
+                                                run.samples.front().torque.size()));
   }
   return s;
 }

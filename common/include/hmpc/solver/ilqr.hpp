@@ -480,11 +480,11 @@ class Ilqr {
       const ControlJacobian& B = fu_[t];
       const RunningDerivatives& l = running_[t];
       const Eigen::Matrix<Scalar, kStateDim, kControlDim> VxxB = Vxx * B;
-      const State Qx = l.lx + A.transpose() * Vx;                // Eq. 2.7
-      Control Qu = l.lu + B.transpose() * Vx;                    // Eq. 2.8
+      const State Qx = l.lx + A.transpose() * Vx;                 // Eq. 2.7
+      Control Qu = l.lu + B.transpose() * Vx;                     // Eq. 2.8
       const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;  // Eq. 2.9
-      Gain Qux = l.lux + VxxB.transpose() * A;                   // Eq. 2.10
-      ControlMatrix Quu = l.luu + B.transpose() * VxxB;          // Eq. 2.11
+      Gain Qux = l.lux + VxxB.transpose() * A;                    // Eq. 2.10
+      ControlMatrix Quu = l.luu + B.transpose() * VxxB;           // Eq. 2.11
       // The change penalty c = (u - p)' W (u - p) and p' = u: c_u = 2W(u - p) = -c_p,
       // c_uu = c_pp = 2W = -c_up; the next value's p-terms enter through du as they would
       // through a Jacobian [B; I]. Nothing in x's rows changes: p' and c do not depend on x.
