@@ -520,8 +520,12 @@ class Ilqr {
         llt_.compute(Quu_reg);
         if (llt_.info() != Eigen::Success) return false;
         k_[t] = -llt_.solve(Qu);  // Eq. 2.12
+        // Gains column by column: a matrix right-hand side takes Eigen's blocked triangular
+        // solver, which may allocate (the firmware's heap guard refuses to link it).
         for (int j = 0; j < kStateDim; ++j) K_[t].col(j) = -llt_.solve(Qux.col(j));
-        if (changes_) Kp_[t] = -llt_.solve(Qup);
+        if (changes_) {
+          for (int j = 0; j < kControlDim; ++j) Kp_[t].col(j) = -llt_.solve(Qup.col(j));
+        }
       }
       const Control& k = k_[t];
       const Gain& K = K_[t];
