@@ -34,21 +34,17 @@ using namespace hmpc::ioc;
 
 constexpr int kFellStatus = 3;
 constexpr const char* kProgram = "hmpc-ioc";
-// The own-MPC demonstrations' starts: the first at rest, the others with the whole robot
-// moving at this speed [m/s] in evenly spread horizontal directions (as the humanoid
-// benchmark's perturbed starts), so that they differ.
-constexpr double kDemoNudge = 0.05;
 
 void usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: hmpc-ioc COMMAND [options]\n"
-      "  hmpc-ioc demos --motion NAME|FILE --out FILE [--count D] [--from plans|runs] [--duration "
-      "S]\n"
-      "                 [--threads T]\n"
+      "  hmpc-ioc demos --motion NAME|FILE --out FILE [--count D] [--from plans|optima|runs]\n"
+      "                 [--duration S] [--threads T]\n"
       "      D demonstrations (1..200, default 4) by the robot's own Coarse MPC (untruncated)\n"
       "      under the motion's weights: 'plans' (default) writes the plan the MPC made at\n"
-      "      every sample, 'runs' the executed trajectories\n"
+      "      every sample, 'optima' each of them re-solved towards its local optimum (50\n"
+      "      iterations), 'runs' the executed trajectories\n"
       "  hmpc-ioc demos --from human --demonstrator NAME|FILE --motion NAME|FILE --out FILE\n"
       "                 --reference FILE [--count D] [--seed N] [--threads T]\n"
       "      D captures of the human demonstrator (NAME: jumping or squatting, in\n"
@@ -57,9 +53,12 @@ void usage(std::FILE* out) {
       "      MPC (the motion gives the tracking weights); writes the demonstrations and, to\n"
       "      --reference, the demonstrated behaviour as a motion file for learn/generate/compare\n"
       "  hmpc-ioc learn --motion NAME|FILE --demos FILE --out FILE [--iterations N] [--threads T]\n"
+      "      [--estimator likelihood|excess-cost]\n"
       "      [--publish-domain D [--dds-loopback] [--publish-timeout S]]\n"
       "      learns the 13 weights of Eq. 4.31 (N: L-BFGS iterations, 1..1000, default 200);\n"
-      "      the motion gives the targets and the weights that are not learned\n"
+      "      the motion gives the targets and the weights that are not learned; 'likelihood'\n"
+      "      (default) maximises Eq. 4.10, 'excess-cost' then takes the ratios of the weights\n"
+      "      from the demonstrations' least excess cost over their local optima\n"
       "  hmpc-ioc generate --motion NAME|FILE --weights FILE [--out DIR] [--mpc KIND]\n"
       "                    [--no-truncate] [--duration S] [--threads T]\n"
       "      runs the motion with the learned weights (default Coarse-Fast MPC in real time)\n"
@@ -100,7 +99,7 @@ bool save_demonstrations(const std::string& path,
   return static_cast<bool>(file.flush());
 }
 
-int demos(const humanoid::Motion& motion, int count, bool plans,
+int demos(const humanoid::Motion& motion, int count, const std::string& from,
           const humanoid::ClosedLoopConfig& run_config, const std::string& out) {
   const int threads = run_config.threads;
   humanoid::ThreadPool pool(threads);
@@ -109,17 +108,17 @@ int demos(const humanoid::Motion& motion, int count, bool plans,
     humanoid::ClosedLoopConfig config = run_config;
     config.mpc = humanoid::MpcKind::kCoarse;
     config.truncate = false;
-    if (i > 0) {
-      const double angle = 2.0 * M_PI * (i - 1) / std::max(1, count - 1);
-      config.initial_velocity = kDemoNudge * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
-    }
+    config.initial_velocity = demonstration_start_velocity(i, count);
     const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(motion, config);
     if (run.fell()) {
       std::printf("demonstration %d: the robot fell at %.2f s; left out\n", i, run.fell_at);
       continue;
     }
-    if (plans) {
-      const std::vector<Demonstration> made = coarse_mpc_plans(motion, run, config.problem, &pool);
+    if (from != "runs") {
+      const std::vector<Demonstration> made =
+          from == "optima"
+              ? coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver())
+              : coarse_mpc_plans(motion, run, config.problem, &pool);
       demonstrations.insert(demonstrations.end(), made.begin(), made.end());
     } else {
       demonstrations.push_back(demonstration_of(run));
@@ -142,7 +141,7 @@ struct Publish {
   double timeout_s = 10;
 };
 
-int learn(const humanoid::Motion& motion, const std::string& demos_path, int iterations,
+int learn(const humanoid::Motion& motion, const std::string& demos_path, LearnConfig config,
           int threads, const std::string& out, const Publish& publish) {
   const std::vector<Demonstration> demonstrations = load_demonstrations(demos_path);
   humanoid::ThreadPool pool(threads);
@@ -151,8 +150,6 @@ int learn(const humanoid::Motion& motion, const std::string& demos_path, int ite
   std::printf("%zu demonstrations, %d windows of %d steps\n", demonstrations.size(),
               ioc.window_count(), kWindowSteps);
   if (ioc.window_count() == 0) return fail("no demonstration is a whole window long", 2);
-  LearnConfig config;
-  config.lbfgs.max_iterations = iterations;
   std::printf("iteration   0  log p %.6e (initial weights, Sec. 4.3.1)\n",
               ioc.log_likelihood(config.initial));
   const LearnResult result = learn_weights(ioc, config, [](int i, const Weights&, double value) {
@@ -172,7 +169,9 @@ int learn(const humanoid::Motion& motion, const std::string& demos_path, int ite
               cosine_similarity(result.weights, file_weights));
   std::ostringstream comment;
   comment << "learned by hmpc-ioc from " << demos_path << ": " << ioc.window_count() << " windows, "
-          << result.iterations << " L-BFGS iterations (" << result.stop << "), log p "
+          << result.iterations << " L-BFGS iterations (" << result.stop << "), "
+          << (config.estimator == Estimator::kLeastExcessCost ? "least excess cost, " : "")
+          << "log p "
           << result.log_likelihood;
   std::ofstream file(out);
   write_weights(file, result.weights, comment.str());
@@ -345,7 +344,9 @@ int main(int argc, char** argv) {
                             "unknown command '" + command + "'", usage);
   }
   std::string motion_name, out, demos_path, weights_path, demonstrator, reference;
-  int count = 4, iterations = 200, seed = 1;
+  int count = 4, seed = 1;
+  LearnConfig learning;
+  learning.lbfgs.max_iterations = 200;
   std::string from = "plans";
   bool no_truncate = false;
   Publish publish;
@@ -366,16 +367,26 @@ int main(int argc, char** argv) {
     parser.integer("--count", 1, 200, count);
     parser.text("--from", [&from](const std::string& v) {
       from = v;
-      return v == "plans" || v == "runs" || v == "human"
+      return v == "plans" || v == "optima" || v == "runs" || v == "human"
                  ? std::string()
-                 : cli::bad_value("--from", "plans, runs or human", v);
+                 : cli::bad_value("--from", "plans, optima, runs or human", v);
     });
     parser.text("--demonstrator", required("--demonstrator", demonstrator));
     parser.text("--reference", required("--reference", reference));
     parser.integer("--seed", 0, 1000000, seed);
   } else if (command == "learn") {
     parser.text("--demos", required("--demos", demos_path));
-    parser.integer("--iterations", 1, 1000, iterations);
+    parser.integer("--iterations", 1, 1000, learning.lbfgs.max_iterations);
+    parser.text("--estimator", [&learning](const std::string& v) {
+      if (v == "likelihood") {
+        learning.estimator = Estimator::kMaximumLikelihood;
+      } else if (v == "excess-cost") {
+        learning.estimator = Estimator::kLeastExcessCost;
+      } else {
+        return cli::bad_value("--estimator", "likelihood or excess-cost", v);
+      }
+      return std::string();
+    });
     // Cyclone maps domain ids to UDP ports 7400 + 250 d + ...: 232 is the last that fits.
     parser.integer("--publish-domain", 0, 232, publish.domain);
     parser.flag("--dds-loopback", publish.loopback);
@@ -418,10 +429,8 @@ int main(int argc, char** argv) {
       return human_demos(motion, stem_of(motion_name), demonstrator, count, seed, config.threads,
                          out, reference);
     }
-    if (command == "demos") return demos(motion, count, from == "plans", config, out);
-    if (command == "learn") {
-      return learn(motion, demos_path, iterations, config.threads, out, publish);
-    }
+    if (command == "demos") return demos(motion, count, from, config, out);
+    if (command == "learn") return learn(motion, demos_path, learning, config.threads, out, publish);
     if (command == "compare")
       return compare(motion, stem_of(motion_name), weights_path, demonstrator, config, out);
     return generate(motion, stem_of(motion_name), weights_path, config, out);

@@ -44,20 +44,27 @@ TEST(Lbfgs, RejectsANonFiniteStart) {
                std::invalid_argument);
 }
 
-TEST(LocalIoc, GradientMatchesFiniteDifferences) {
+// Both of LocalIoc's terms: the likelihood (Eq. 4.10) and the excess cost.
+class LocalIocTerm : public ::testing::TestWithParam<bool> {};
+
+TEST_P(LocalIocTerm, GradientMatchesFiniteDifferences) {
+  const bool likelihood = GetParam();
   const Motion motion = jump_motion();
   // The crouch before the jump: two windows. (Across a landing the step map's Jacobians reach
   // 1e4 and the likelihood carries round-off of 1e-5, too much for difference quotients.)
   const std::vector<Demonstration> demos{own_demonstration(motion, 0.6, Eigen::Vector3d::Zero())};
   const LocalIoc ioc(motion, demos);
   ASSERT_EQ(ioc.window_count(), 2);
+  const auto term = [&](const Weights& w, Weights* gradient = nullptr) {
+    return likelihood ? ioc.log_likelihood(w, gradient) : ioc.excess_cost(w, gradient);
+  };
   // Weights of mixed magnitude, like a learned set; the derivative in log w (what the learner
   // uses), so that every entry is on the same scale.
   Weights w = weights_of(motion.weights);
   w[kBeta] *= 0.3;
   w[kVy] *= 3.0;
   Weights gradient;
-  ioc.log_likelihood(w, &gradient);
+  term(w, &gradient);
   // Central differences in log w_k at steps h and h/2 combined by Richardson extrapolation,
   // (4 D(h/2) - D(h)) / 3, which cancels the h^2 error term. Tolerance 5e-4 relative: on
   // aarch64 (qemu) the differences of w_q1 stay 1.2e-4 to 1.7e-4 off with or without extrapolation,
@@ -67,7 +74,7 @@ TEST(LocalIoc, GradientMatchesFiniteDifferences) {
     Weights plus = w, minus = w;
     plus[k] *= std::exp(h);
     minus[k] *= std::exp(-h);
-    return (ioc.log_likelihood(plus) - ioc.log_likelihood(minus)) / (2.0 * h);
+    return (term(plus) - term(minus)) / (2.0 * h);
   };
   for (int k = 0; k < kWeightCount; ++k) {
     const double h = 2e-3;
@@ -76,6 +83,11 @@ TEST(LocalIoc, GradientMatchesFiniteDifferences) {
     EXPECT_NEAR(analytic, numeric, 5e-4 * std::max(1.0, std::abs(numeric))) << kWeightNames[k];
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(LogLikelihoodAndExcessCost, LocalIocTerm, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "LogLikelihood" : "ExcessCost";
+                         });
 
 TEST(LocalIoc, RejectsBadDemonstrationsAndWeights) {
   const Motion motion = jump_motion();

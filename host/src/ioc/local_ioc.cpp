@@ -145,8 +145,9 @@ LocalIoc::LocalIoc(const humanoid::Motion& motion, const std::vector<Demonstrati
 
 LocalIoc::~LocalIoc() = default;
 
-double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, Workspace& work,
-                                       Weights* gradient) const {
+double LocalIoc::window_term(Term term, const Window& window, const Weights& w,
+                             Workspace& work, Weights* gradient) const {
+  const bool likelihood = term == Term::kLogLikelihood;
   // Row weights: the estimated weight of the row's term, or 1 (the row carries its own).
   Eigen::Matrix<double, kResiduals, 1> c;
   for (int r = 0; r < kResiduals; ++r) c[r] = feature_of_row_[r] < 0 ? 1.0 : w[feature_of_row_[r]];
@@ -186,12 +187,16 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
     // Positive definite in exact arithmetic (see the header); round-off in V_xx across a
     // landing can still break it at extreme weights: the likelihood is then -infinity, which
     // the learner's line search backs away from.
-    if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
+    if (llt.info() != Eigen::Success) {
+      return likelihood ? -std::numeric_limits<double>::infinity()
+                        : std::numeric_limits<double>::infinity();
+    }
     work.k[t] = llt.solve(Q_u);
     work.K[t] = llt.solve(Q_ux);
     work.Q_uu_inverse[t] = llt.solve(JointMatrix::Identity());
-    value += -0.5 * Q_u.dot(work.k[t]) + llt.matrixLLT().diagonal().array().log().sum() -
-             0.5 * free * kLog2Pi;
+    value += likelihood ? -0.5 * Q_u.dot(work.k[t]) +
+                              llt.matrixLLT().diagonal().array().log().sum() - 0.5 * free * kLog2Pi
+                        : 0.5 * Q_u.dot(work.k[t]);
     if (t == 0) break;  // V at x_1 is not needed
     StateVector Q_x = A.transpose() * work.V_x;
     StateMatrix Q_xx = A.transpose() * work.V_xx * A;
@@ -213,8 +218,11 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
   // Eqs. 4.11-4.20 (differentiating the backward pass), computed through the closed-loop
   // dynamics A - B K instead: differentiating the backward pass carries the open-loop products
   // of A, which lost every digit on landing windows (measured: -4014 against 1.72 by
-  // differences), while this pass stays within round-off of the differences.
+  // differences), while this pass stays within round-off of the differences. The excess cost
+  // 1/2 g' H^-1 g has the gradient h' g_k - 1/2 h' H_k h: the mean deviations' terms, negated,
+  // without the covariances.
   if (gradient == nullptr) return value;
+  const double sign = likelihood ? 1.0 : -1.0;
   gradient->setZero();
   StateVector dx = StateVector::Zero();
   StateMatrix Sigma_x = StateMatrix::Zero();
@@ -223,18 +231,23 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
     const humanoid::StepControlJacobian& B = window.B[t];
     const JointStateMatrix& K = work.K[t];
     const JointVector du = -work.k[t] - K * dx;
-    const JointMatrix Sigma_u = K * Sigma_x * K.transpose() + work.Q_uu_inverse[t];
+    JointVector Sigma_u_diagonal = JointVector::Zero();
+    if (likelihood) {
+      Sigma_u_diagonal = (K * Sigma_x * K.transpose() + work.Q_uu_inverse[t]).diagonal();
+    }
     // A control weight's feature: l_u = 2 u_j, l_uu = 2 on its free inputs, so its terms are
     // 2 u_j du_j + du_j^2 + Sigma_u,jj.
     for (int j = 0; j < kJoints; ++j) {
       if (!window.free[t][j]) continue;
       (*gradient)[kHAA + j % humanoid::kJointsPerLeg] +=
-          2.0 * window.inputs[t][j] * du[j] + du[j] * du[j] + Sigma_u(j, j);
+          sign * (2.0 * window.inputs[t][j] * du[j] + du[j] * du[j]) + Sigma_u_diagonal[j];
     }
-    const humanoid::StepJacobian closed_loop = A - B * K;
+    if (likelihood) {
+      const humanoid::StepJacobian closed_loop = A - B * K;
+      Sigma_x = closed_loop * Sigma_x * closed_loop.transpose() +
+                B * work.Q_uu_inverse[t] * B.transpose();
+    }
     dx = A * dx + B * du;
-    Sigma_x =
-        closed_loop * Sigma_x * closed_loop.transpose() + B * work.Q_uu_inverse[t] * B.transpose();
     // A state row r of weight k at x_{t+1}: l_x = 2 r J_r', l_xx = 2 J_r' J_r, so its terms
     // are 2 r a + a^2 + J_r Sigma_x J_r' with a = J_r dx.
     const auto& J = window.J[t];
@@ -242,14 +255,39 @@ double LocalIoc::window_log_likelihood(const Window& window, const Weights& w, W
       const int k = feature_of_row_[row];
       if (k < 0) continue;
       const double a = J.row(row).dot(dx);
-      (*gradient)[k] +=
-          2.0 * window.residual[t][row] * a + a * a + J.row(row) * Sigma_x * J.row(row).transpose();
+      const double spread = likelihood ? J.row(row) * Sigma_x * J.row(row).transpose() : 0.0;
+      (*gradient)[k] += sign * (2.0 * window.residual[t][row] * a + a * a) + spread;
     }
   }
   return value;
 }
 
 double LocalIoc::log_likelihood(const Weights& w, Weights* gradient) const {
+  return evaluate(Term::kLogLikelihood, w, gradient);
+}
+
+double LocalIoc::excess_cost(const Weights& w, Weights* gradient) const {
+  return evaluate(Term::kExcessCost, w, gradient);
+}
+
+Weights LocalIoc::term_costs(const Weights& w) const {
+  Weights costs = Weights::Zero();
+  for (const Window& window : windows_) {
+    for (int t = 0; t < kWindowSteps; ++t) {
+      for (int j = 0; j < kJoints; ++j) {
+        const int k = kHAA + j % humanoid::kJointsPerLeg;
+        if (window.free[t][j]) costs[k] += w[k] * window.inputs[t][j] * window.inputs[t][j];
+      }
+      for (int row = 0; row < kResiduals; ++row) {
+        const int k = feature_of_row_[row];
+        if (k >= 0) costs[k] += w[k] * window.residual[t][row] * window.residual[t][row];
+      }
+    }
+  }
+  return costs;
+}
+
+double LocalIoc::evaluate(Term term, const Weights& w, Weights* gradient) const {
   if (!(w.array() > 0.0).all() || !w.allFinite()) {
     throw std::invalid_argument("local IOC: every weight must be positive and finite");
   }
@@ -258,7 +296,7 @@ double LocalIoc::log_likelihood(const Weights& w, Weights* gradient) const {
   humanoid::run_on(pool_, lanes, [&](int lane) {
     for (int m = lane; m < count; m += lanes) {
       values_[m] =
-          window_log_likelihood(windows_[m], w, lanes_[lane], gradient ? &gradients_[m] : nullptr);
+          window_term(term, windows_[m], w, lanes_[lane], gradient ? &gradients_[m] : nullptr);
     }
   });
   // Summed in window order: the same total on any number of threads.

@@ -37,4 +37,17 @@ double cosine_similarity(const Weights& a, const Weights& b) {
   return a.dot(b) / (a.norm() * b.norm());
 }
 
+Weights log_errors_up_to_scale(const Weights& learned, const Weights& truth,
+                               const std::array<bool, kWeightCount>& counted) {
+  const Weights log_ratio = (learned.array() / truth.array()).log().matrix();
+  double sum = 0.0;
+  int count = 0;
+  for (int k = 0; k < kWeightCount; ++k) {
+    if (!counted[k]) continue;
+    sum += log_ratio[k];
+    ++count;
+  }
+  return (log_ratio.array() - (count > 0 ? sum / count : 0.0)).matrix();
+}
+
 }  // namespace hmpc::ioc

@@ -10,8 +10,17 @@
 
 namespace hmpc::ioc {
 
+enum class Estimator {
+  // Eq. 4.10's maximum over all 13 weights, as the thesis learns.
+  kMaximumLikelihood,
+  // The low-temperature limit: the weights minimising the demonstrations' excess cost
+  // (LocalIoc::excess_cost), the motion's fixed weights setting their scale.
+  kLeastExcessCost,
+};
+
 struct LearnConfig {
   Weights initial = initial_weights();  // Sec. 4.3.1
+  Estimator estimator = Estimator::kMaximumLikelihood;
   LbfgsConfig lbfgs{};
 };
 

@@ -101,12 +101,27 @@ class LocalIoc {
   // (std::invalid_argument otherwise). -infinity (gradient unspecified) if round-off made a
   // Q_uu indefinite.
   double log_likelihood(const Weights& w, Weights* gradient = nullptr) const;
+  // The demonstrations' excess cost: sum over windows of 1/2 g' H^-1 g = sum_t 1/2 Q_u' Q_uu^-1
+  // Q_u, how far the Gauss-Newton model puts each window's cost above the local optimum it
+  // predicts. Eq. 4.10 is -(this) + 1/2 log |H| + constant; at low temperature (every weight
+  // scaled by c -> infinity) the excess cost, which grows like c, outweighs the log-determinant,
+  // which grows like log c, so the likelihood's maximiser in the weights' ratios tends to this
+  // one's minimiser. The gradient is Eq. 4.21's terms without 1/2 tr(H^-1 H_k). Same
+  // conditions as log_likelihood; +infinity where that is -infinity.
+  double excess_cost(const Weights& w, Weights* gradient = nullptr) const;
+  // Each estimated weight's term of the demonstrations' cost under `w`: w_k times its feature
+  // summed over every window's steps (Eq. 4.3), the fixed weights' terms left out. A term that
+  // stays near zero along the demonstrations (e.g. lateral velocity in a jump in the sagittal
+  // plane) is one they barely reveal.
+  Weights term_costs(const Weights& w) const;
 
  private:
   struct Workspace;
+  enum class Term { kLogLikelihood, kExcessCost };
+  double evaluate(Term term, const Weights& w, Weights* gradient) const;
   // Window m's term and, if `gradient` is non-null, its gradient (the forward pass), in `work`.
-  double window_log_likelihood(const Window& window, const Weights& w, Workspace& work,
-                               Weights* gradient) const;
+  double window_term(Term term, const Window& window, const Weights& w, Workspace& work,
+                     Weights* gradient) const;
 
   std::vector<Window> windows_;
   std::array<int, kResiduals> feature_of_row_{};  // estimated weight of residual row, or -1

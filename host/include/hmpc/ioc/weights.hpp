@@ -30,5 +30,9 @@ humanoid::CostWeights with_weights(humanoid::CostWeights base, const Weights& w)
 Weights initial_weights();
 // a.b / (|a| |b|): agreement up to scale.
 double cosine_similarity(const Weights& a, const Weights& b);
+// log(learned_k / true_k) after one common scale, the mean of the log ratios over the weights
+// `counted` marks (IOC recovers weights up to scale): 0 where a weight was recovered exactly.
+Weights log_errors_up_to_scale(const Weights& learned, const Weights& truth,
+                               const std::array<bool, kWeightCount>& counted);
 
 }  // namespace hmpc::ioc
