@@ -116,9 +116,8 @@ int demos(const humanoid::Motion& motion, int count, const std::string& from,
     }
     if (from != "runs") {
       const std::vector<Demonstration> made =
-          from == "optima"
-              ? coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver())
-              : coarse_mpc_plans(motion, run, config.problem, &pool);
+          from == "optima" ? coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver())
+                           : coarse_mpc_plans(motion, run, config.problem, &pool);
       demonstrations.insert(demonstrations.end(), made.begin(), made.end());
     } else {
       demonstrations.push_back(demonstration_of(run));
@@ -171,8 +170,7 @@ int learn(const humanoid::Motion& motion, const std::string& demos_path, LearnCo
   comment << "learned by hmpc-ioc from " << demos_path << ": " << ioc.window_count() << " windows, "
           << result.iterations << " L-BFGS iterations (" << result.stop << "), "
           << (config.estimator == Estimator::kLeastExcessCost ? "least excess cost, " : "")
-          << "log p "
-          << result.log_likelihood;
+          << "log p " << result.log_likelihood;
   std::ofstream file(out);
   write_weights(file, result.weights, comment.str());
   if (!file.flush()) return fail("cannot write " + out, 1);
@@ -430,7 +428,8 @@ int main(int argc, char** argv) {
                          out, reference);
     }
     if (command == "demos") return demos(motion, count, from, config, out);
-    if (command == "learn") return learn(motion, demos_path, learning, config.threads, out, publish);
+    if (command == "learn")
+      return learn(motion, demos_path, learning, config.threads, out, publish);
     if (command == "compare")
       return compare(motion, stem_of(motion_name), weights_path, demonstrator, config, out);
     return generate(motion, stem_of(motion_name), weights_path, config, out);

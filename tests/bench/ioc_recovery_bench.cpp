@@ -40,13 +40,14 @@ enum Method { kToday, kResolved, kExcess, kConverged, kMethods };
 constexpr const char* kMethodNames[kMethods] = {"today", "re-solved", "excess", "converged"};
 
 void usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: ioc_recovery_bench [--draws D] [--runs N] [--seed S] [--decades R]\n"
-               "                          [--motion NAME]...\n"
-               "  D hidden weight vectors per motion (default 5, 1..100), N runs each (default 3),\n"
-               "  seed S (default 1), each weight log-uniform over R decades around the motion\n"
-               "  file's (default 1; 0: the file's own), motions by name (default V-low-jump and\n"
-               "  squatting)\n");
+  std::fprintf(
+      out,
+      "usage: ioc_recovery_bench [--draws D] [--runs N] [--seed S] [--decades R]\n"
+      "                          [--motion NAME]...\n"
+      "  D hidden weight vectors per motion (default 5, 1..100), N runs each (default 3),\n"
+      "  seed S (default 1), each weight log-uniform over R decades around the motion\n"
+      "  file's (default 1; 0: the file's own), motions by name (default V-low-jump and\n"
+      "  squatting)\n");
 }
 
 double seconds_since(Clock::time_point start) {
@@ -70,9 +71,10 @@ void run_motion(const std::string& name, int draws, int runs, double decades, st
       humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + name + ".motion");
   const double half_spread = 0.5 * decades * std::log(10.0);
   std::uniform_real_distribution<double> spread(-half_spread, half_spread);
-  std::printf("\n%s: %d draws of %d runs each; ratio learned/true per weight after the common "
-              "scale\n",
-              name.c_str(), draws, runs);
+  std::printf(
+      "\n%s: %d draws of %d runs each; ratio learned/true per weight after the common "
+      "scale\n",
+      name.c_str(), draws, runs);
   std::printf("  %-10s", "");
   for (const char* weight : kWeightNames) std::printf(" %7s", weight);
   std::printf("\n");
@@ -99,7 +101,8 @@ void run_motion(const std::string& name, int draws, int runs, double decades, st
       const auto plans = coarse_mpc_plans(motion, run, config.problem, &pool);
       capped.insert(capped.end(), plans.begin(), plans.end());
       std::vector<SolveStatus> status;
-      const auto solved = coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver(), &status);
+      const auto solved =
+          coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver(), &status);
       resolved.insert(resolved.end(), solved.begin(), solved.end());
       for (std::size_t m = 0; m < solved.size(); ++m) {
         if (status[m] == SolveStatus::kConverged) converged.push_back(solved[m]);
@@ -117,9 +120,9 @@ void run_motion(const std::string& name, int draws, int runs, double decades, st
     for (int k = 0; k < kWeightCount; ++k) excited[k] = costs[k] >= kExcited * costs.sum();
     LearnConfig excess;
     excess.estimator = Estimator::kLeastExcessCost;
-    const Weights learned[kMethods] = {
-        learn_weights(today).weights, learn_weights(all).weights,
-        learn_weights(all, excess).weights, learn_weights(optima, excess).weights};
+    const Weights learned[kMethods] = {learn_weights(today).weights, learn_weights(all).weights,
+                                       learn_weights(all, excess).weights,
+                                       learn_weights(optima, excess).weights};
     std::printf(" draw %d (%.0f s; %zu of %zu re-solved plans converged)\n", d,
                 seconds_since(start), converged.size(), resolved.size());
     for (int m = 0; m < kMethods; ++m) {

@@ -125,8 +125,8 @@ TEST(LocalIoc, LeastExcessCostRecoversTheSquatsWeightsFromItsOptima) {
   const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(motion, config);
   ASSERT_FALSE(run.fell());
   humanoid::ThreadPool pool(2);
-  const LocalIoc ioc(
-      motion, coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver()), &pool);
+  const LocalIoc ioc(motion, coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver()),
+                     &pool);
   const Weights truth = weights_of(motion.weights);
   std::array<bool, kWeightCount> all;
   all.fill(true);

@@ -145,8 +145,8 @@ LocalIoc::LocalIoc(const humanoid::Motion& motion, const std::vector<Demonstrati
 
 LocalIoc::~LocalIoc() = default;
 
-double LocalIoc::window_term(Term term, const Window& window, const Weights& w,
-                             Workspace& work, Weights* gradient) const {
+double LocalIoc::window_term(Term term, const Window& window, const Weights& w, Workspace& work,
+                             Weights* gradient) const {
   const bool likelihood = term == Term::kLogLikelihood;
   // Row weights: the estimated weight of the row's term, or 1 (the row carries its own).
   Eigen::Matrix<double, kResiduals, 1> c;
