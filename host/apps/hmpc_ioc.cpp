@@ -57,8 +57,9 @@ void usage(std::FILE* out) {
       "      [--publish-domain D [--dds-loopback] [--publish-timeout S]]\n"
       "      learns the 13 weights of Eq. 4.31 (N: L-BFGS iterations, 1..1000, default 200);\n"
       "      the motion gives the targets and the weights that are not learned; 'likelihood'\n"
-      "      (default) maximises Eq. 4.10, 'excess-cost' then takes the ratios of the weights\n"
-      "      from the demonstrations' least excess cost over their local optima\n"
+      "      maximises Eq. 4.10, 'excess-cost' (default: it recovers hidden weights and\n"
+      "      regenerates the demonstrated motions better, README) then takes the weights'\n"
+      "      ratios from the demonstrations' least excess cost over their local optima\n"
       "  hmpc-ioc generate --motion NAME|FILE --weights FILE [--out DIR] [--mpc KIND]\n"
       "                    [--no-truncate] [--duration S] [--threads T]\n"
       "      runs the motion with the learned weights (default Coarse-Fast MPC in real time)\n"
@@ -140,7 +141,7 @@ struct Publish {
   double timeout_s = 10;
 };
 
-int learn(const humanoid::Motion& motion, const std::string& demos_path, LearnConfig config,
+int learn(const humanoid::Motion& motion, const std::string& demos_path, const LearnConfig& config,
           int threads, const std::string& out, const Publish& publish) {
   const std::vector<Demonstration> demonstrations = load_demonstrations(demos_path);
   humanoid::ThreadPool pool(threads);
@@ -344,6 +345,7 @@ int main(int argc, char** argv) {
   std::string motion_name, out, demos_path, weights_path, demonstrator, reference;
   int count = 4, seed = 1;
   LearnConfig learning;
+  learning.estimator = Estimator::kLeastExcessCost;
   learning.lbfgs.max_iterations = 200;
   std::string from = "plans";
   bool no_truncate = false;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "hmpc/ioc/demonstrations.hpp"
 #include "hmpc/ioc/learn.hpp"
@@ -24,7 +25,7 @@ using test::own_demonstration;
 LearnResult learn_and_print(const LocalIoc& ioc, const Weights& truth) {
   LearnConfig config;
   config.lbfgs.max_iterations = 200;
-  const LearnResult result = learn_weights(ioc, config, [&](int i, const Weights& w, double value) {
+  LearnResult result = learn_weights(ioc, config, [&](int i, const Weights& w, double value) {
     std::printf("iteration %3d  log p %.6e  cosine %.4f\n", i, value, cosine_similarity(w, truth));
   });
   std::printf("%s after %d iterations\n", result.stop.c_str(), result.iterations);
@@ -37,18 +38,35 @@ LearnResult learn_and_print(const LocalIoc& ioc, const Weights& truth) {
   return result;
 }
 
+// An untruncated run of the Coarse MPC on `motion` (the same on any machine; `duration` 0: the
+// file's) and its plans remade by coarse_mpc_plans with `solve` (default: the MPC's own).
+struct OwnPlans {
+  humanoid::ClosedLoopRun run;
+  std::vector<Demonstration> plans;
+  std::vector<SolveStatus> status;
+};
+OwnPlans own_plans(const Motion& motion, humanoid::ThreadPool* pool, double duration = 0.0,
+                   const std::optional<IlqrConfig<double>>& solve = std::nullopt) {
+  ClosedLoopConfig config;
+  config.mpc = MpcKind::kCoarse;
+  config.truncate = false;
+  config.duration = duration;
+  OwnPlans own;
+  own.run = humanoid::run_closed_loop(motion, config);
+  EXPECT_FALSE(own.run.fell());
+  own.plans = coarse_mpc_plans(motion, own.run, config.problem, pool, solve, &own.status);
+  return own;
+}
+
 // Recovery: the robot's own MPC under known weights, no noise; recovered up to scale with
 // cosine similarity >= 0.95. The demonstrations are the Coarse MPC's plans along a jump, one
 // window each (100).
 TEST(LocalIoc, RecoversTheWeightsOfTheRobotsOwnMpcFromItsPlans) {
   const Motion motion = jump_motion();
-  ClosedLoopConfig config;
-  config.mpc = MpcKind::kCoarse;
-  config.truncate = false;
-  const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(motion, config);
-  ASSERT_FALSE(run.fell());
   humanoid::ThreadPool pool(2);
-  const std::vector<Demonstration> plans = coarse_mpc_plans(motion, run, config.problem, &pool);
+  const OwnPlans own = own_plans(motion, &pool);
+  const std::vector<Demonstration>& plans = own.plans;
+  const humanoid::ClosedLoopRun& run = own.run;
   ASSERT_EQ(plans.size(), run.samples.size());
   for (std::size_t k = 0; k < plans.size(); ++k) {  // the replay made the run's plans
     ASSERT_TRUE(plans[k].inputs[0].isApprox(run.samples[k].torque, 1e-12)) << "sample " << k;
@@ -88,14 +106,10 @@ TEST(LocalIoc, LearnsTowardsTheWeightsOfTheRobotsOwnMpcFromItsRuns) {
 // a weight the plan was not made with.
 TEST(LocalIoc, ExcessCostVanishesAtAConvergedPlan) {
   const Motion motion = jump_motion();
-  ClosedLoopConfig config;
-  config.mpc = MpcKind::kCoarse;
-  config.truncate = false;
-  config.duration = 0.09;  // standing before the jump: 3 plans
-  const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(motion, config);
-  std::vector<SolveStatus> status;
-  const std::vector<Demonstration> plans =
-      coarse_mpc_plans(motion, run, config.problem, nullptr, optimum_solver(), &status);
+  // Standing before the jump: 3 plans.
+  const OwnPlans own = own_plans(motion, nullptr, 0.09, optimum_solver());
+  const std::vector<Demonstration>& plans = own.plans;
+  const std::vector<SolveStatus>& status = own.status;
   ASSERT_EQ(status.size(), 3u);
   const Weights truth = weights_of(motion.weights);
   Weights other = truth;
@@ -112,21 +126,15 @@ TEST(LocalIoc, ExcessCostVanishesAtAConvergedPlan) {
 }
 
 // The squat's own weights from its plans re-solved towards their optima (one run at rest, 80
-// windows): the least excess cost recovers every weight within the figures (RMS of
+// windows): the least excess cost recovers every weight within the recovery targets (RMS of
 // log(learned/true) after a common scale at most 0.25, no weight off by a factor 2), where
 // Eq. 4.10's maximum on the same windows does not (measured: 0.20 and 1.47 against 0.36 and
 // 2.16); its scale is the likelihood's.
 TEST(LocalIoc, LeastExcessCostRecoversTheSquatsWeightsFromItsOptima) {
   const Motion motion =
       humanoid::load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/squatting.motion");
-  ClosedLoopConfig config;
-  config.mpc = MpcKind::kCoarse;
-  config.truncate = false;
-  const humanoid::ClosedLoopRun run = humanoid::run_closed_loop(motion, config);
-  ASSERT_FALSE(run.fell());
   humanoid::ThreadPool pool(2);
-  const LocalIoc ioc(motion, coarse_mpc_plans(motion, run, config.problem, &pool, optimum_solver()),
-                     &pool);
+  const LocalIoc ioc(motion, own_plans(motion, &pool, 0.0, optimum_solver()).plans, &pool);
   const Weights truth = weights_of(motion.weights);
   std::array<bool, kWeightCount> all;
   all.fill(true);
