@@ -7,13 +7,13 @@
 // weights the motion excites), with the RMS of its log over those weights and all draws.
 // Methods, side by side on the same draws:
 //   today      the MPC's own plans (Table 2.4's 6 iterations a sample), Eq. 4.10's maximum, as
-//              `hmpc-ioc demos` and `learn` do;
+//              the thesis learns (`hmpc-ioc demos`, `learn --estimator likelihood`);
 //   re-solved  the same windows each re-solved by the iLQR towards its local optimum
 //              (optimum_solver), Eq. 4.10's maximum;
 //   excess     the re-solved windows, the ratios by the least excess cost (learn.hpp);
 //   converged  the re-solved windows whose solve converged (a local optimum), least excess cost.
 // A weight is excited when its term carries at least kExcited of the demonstrations' cost
-// under the hidden weights (LocalIoc::term_costs); the others are listed with their share.
+// under the hidden weights (LocalIoc::term_costs); every weight's share is printed.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -32,8 +32,8 @@ using namespace hmpc::ioc;
 using Clock = std::chrono::steady_clock;
 
 // Our choice: a term below a thousandth of the demonstrations' cost is one whose feature stays
-// at its target along them (in these motions: roll, yaw and lateral velocity, by the sagittal
-// symmetry), which only the curvature of the cost around the demonstrations can reveal.
+// at its target along them, which only the curvature of the cost around the demonstrations can
+// reveal.
 constexpr double kExcited = 1e-3;
 
 enum Method { kToday, kResolved, kExcess, kConverged, kMethods };

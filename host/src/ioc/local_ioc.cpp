@@ -193,7 +193,7 @@ double LocalIoc::window_term(Term term, const Window& window, const Weights& w, 
     }
     work.k[t] = llt.solve(Q_u);
     work.K[t] = llt.solve(Q_ux);
-    work.Q_uu_inverse[t] = llt.solve(JointMatrix::Identity());
+    if (likelihood) work.Q_uu_inverse[t] = llt.solve(JointMatrix::Identity());  // covariances
     value += likelihood ? -0.5 * Q_u.dot(work.k[t]) +
                               llt.matrixLLT().diagonal().array().log().sum() - 0.5 * free * kLog2Pi
                         : 0.5 * Q_u.dot(work.k[t]);

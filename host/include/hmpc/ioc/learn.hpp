@@ -13,8 +13,8 @@ namespace hmpc::ioc {
 enum class Estimator {
   // Eq. 4.10's maximum over all 13 weights, as the thesis learns.
   kMaximumLikelihood,
-  // The low-temperature limit: the weights minimising the demonstrations' excess cost
-  // (LocalIoc::excess_cost), the motion's fixed weights setting their scale.
+  // Eq. 4.10's low-temperature limit: the weights' common scale from Eq. 4.10's maximum, their
+  // ratios from the demonstrations' least excess cost (LocalIoc::excess_cost) at that scale.
   kLeastExcessCost,
 };
 
