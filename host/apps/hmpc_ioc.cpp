@@ -6,6 +6,7 @@
 //   generate  a motion with learned weights through the Coarse-Fast MPC (Sec. 4.2.3)
 //   compare   generation with the initial and the learned weights against the targets
 //             (Figs. 4.3-4.5)
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -46,7 +47,8 @@ void usage(std::FILE* out) {
       "      every sample, 'optima' each of them re-solved towards its local optimum (50\n"
       "      iterations), 'runs' the executed trajectories\n"
       "  hmpc-ioc demos --from human --demonstrator NAME|FILE --motion NAME|FILE --out FILE\n"
-      "                 --reference FILE [--count D] [--seed N] [--threads T]\n"
+      "                 --reference FILE [--count D] [--seed N] [--warping froude|feasibility]\n"
+      "                 [--threads T]\n"
       "      D captures of the human demonstrator (NAME: jumping or squatting, in\n"
       "      " HMPC_IOC_DEMONSTRATORS
       "), retargeted to the robot and tracked by its Coarse\n"
@@ -221,9 +223,29 @@ int generate(humanoid::Motion motion, const std::string& stem, const std::string
   return run.fell() ? kFellStatus : 0;
 }
 
+// Step 2c's figures: the feasibility index of the mean aligned capture on the Froude timeline
+// and on the one played, and the speed factors' range and the duration they give.
+void print_warping(const Retargeted& r) {
+  if (r.nominal_index.empty()) return;
+  const auto rms = [](const std::vector<double>& v) {
+    double sum = 0.0;
+    for (const double x : v) sum += x * x;
+    return std::sqrt(sum / static_cast<double>(v.size()));
+  };
+  const auto largest = [](const std::vector<double>& v) {
+    return *std::max_element(v.begin(), v.end());
+  };
+  const auto [slowest, fastest] = std::minmax_element(r.speeds.begin(), r.speeds.end());
+  std::printf(
+      "feasibility index (body weights): Froude timeline RMS %.3f, largest %.3f; played "
+      "RMS %.3f, largest %.3f; speed factors %.2f..%.2f, %.2f s\n",
+      rms(r.nominal_index), largest(r.nominal_index), rms(r.warped_index), largest(r.warped_index),
+      *slowest, *fastest, r.reference.duration);
+}
+
 int human_demos(const humanoid::Motion& task, const std::string& task_name,
-                const std::string& demonstrator_name, int count, int seed, int threads,
-                const std::string& out, const std::string& reference_out) {
+                const std::string& demonstrator_name, int count, int seed, TimeWarping warping,
+                int threads, const std::string& out, const std::string& reference_out) {
   const humanoid::Motion demonstrator =
       humanoid::load_motion(humanoid::motion_path(demonstrator_name, HMPC_IOC_DEMONSTRATORS));
   const auto start = std::chrono::steady_clock::now();
@@ -243,10 +265,13 @@ int human_demos(const humanoid::Motion& task, const std::string& task_name,
   if (captures.empty()) return fail("no capture: the demonstrator fell in every performance", 1);
   RetargetConfig config;
   config.threads = threads;
+  config.warping = warping;
   const Retargeted r = retarget(captures, task, config, [](int i, const TrackedDemonstration& t) {
-    std::printf("tracking %2d: RMS errors joints %.3f rad, height %.3f m, attitude %.3f rad%s\n", i,
-                t.errors.joints, t.errors.height, t.errors.attitude,
-                t.fell ? "; the robot FELL, left out" : "");
+    std::printf(
+        "tracking %2d: RMS errors joints %.3f rad, height %.3f m, attitude %.3f rad; apex %.3f m, "
+        "flight %.0f ms%s\n",
+        i, t.errors.joints, t.errors.height, t.errors.attitude, t.apex, 1e3 * t.flight,
+        t.fell ? "; the robot FELL, left out" : "");
     std::fflush(stdout);
   });
   std::vector<Demonstration> demonstrations;
@@ -257,6 +282,7 @@ int human_demos(const humanoid::Motion& task, const std::string& task_name,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%zu captures, time scale %.3f (Froude), %zu demonstrations in %.1f s\n",
               captures.size(), r.time_scale, demonstrations.size(), seconds);
+  print_warping(r);
   if (demonstrations.empty())
     return fail("no demonstration: the robot fell in every tracking run", 1);
   if (!save_demonstrations(out, demonstrations)) return fail("cannot write " + out, 1);
@@ -288,15 +314,26 @@ int compare(const humanoid::Motion& motion, const std::string& stem,
     const humanoid::ClosedLoopSummary s = humanoid::summarise(run);
     errors[k] = motion_errors(motion, run);
     fell[k] = run.fell();
-    std::printf("%s weights, %s MPC: max solve %.1f ms, over 30 ms %d of %zu%s\n", names[k],
-                humanoid::name_of(config.mpc), s.max_solve_ms, s.overruns, run.samples.size(),
-                fell[k] ? (", FELL at " + std::to_string(run.fell_at) + " s").c_str() : "");
+    std::printf(
+        "%s weights, %s MPC: max solve %.1f ms, over 30 ms %d of %zu; apex %.3f m, lowest %.3f m, "
+        "longest flight %.0f ms%s\n",
+        names[k], humanoid::name_of(config.mpc), s.max_solve_ms, s.overruns, run.samples.size(),
+        humanoid::apex_height(run), humanoid::lowest_height(run),
+        1e3 * humanoid::longest_flight(run),
+        fell[k] ? (", FELL at " + std::to_string(run.fell_at) + " s").c_str() : "");
     std::string error;
     if (!humanoid::write_run(out + "/" + names[k], stem + ", " + names[k] + " weights", m, run, 8,
                              error)) {
       return fail(error, 1);
     }
   }
+  double high = -1e9, low = 1e9;
+  for (double t = 0.0; t <= motion.duration; t += 0.01) {
+    const double height = motion.phase_at(t).height_at(t);
+    high = std::max(high, height);
+    low = std::min(low, height);
+  }
+  std::printf("targets: base height %.3f..%.3f m\n", low, high);
   std::printf("%-28s %10s %10s\n", "RMS error against targets", "initial", "learned");
   std::printf("%-28s %10.4f %10.4f\n", "base height [m]", errors[0].height, errors[1].height);
   std::printf("%-28s %10.4f %10.4f\n", "attitude [rad]", errors[0].attitude, errors[1].attitude);
@@ -344,6 +381,8 @@ int main(int argc, char** argv) {
   }
   std::string motion_name, out, demos_path, weights_path, demonstrator, reference;
   int count = 4, seed = 1;
+  TimeWarping warping = TimeWarping::kFroude;
+  bool warping_given = false;
   LearnConfig learning;
   learning.estimator = Estimator::kLeastExcessCost;
   learning.lbfgs.max_iterations = 200;
@@ -374,6 +413,17 @@ int main(int argc, char** argv) {
     parser.text("--demonstrator", required("--demonstrator", demonstrator));
     parser.text("--reference", required("--reference", reference));
     parser.integer("--seed", 0, 1000000, seed);
+    parser.text("--warping", [&warping, &warping_given](const std::string& v) {
+      warping_given = true;
+      if (v == "froude") {
+        warping = TimeWarping::kFroude;
+      } else if (v == "feasibility") {
+        warping = TimeWarping::kFeasibility;
+      } else {
+        return cli::bad_value("--warping", "froude or feasibility", v);
+      }
+      return std::string();
+    });
   } else if (command == "learn") {
     parser.text("--demos", required("--demos", demos_path));
     parser.integer("--iterations", 1, 1000, learning.lbfgs.max_iterations);
@@ -412,8 +462,9 @@ int main(int argc, char** argv) {
         : command != "demos" && command != "learn" && weights_path.empty() ? "--weights is required"
         : from == "human" && demonstrator.empty() ? "--from human needs --demonstrator"
         : from == "human" && reference.empty()    ? "--from human needs --reference"
-        : command == "demos" && from != "human" && !(demonstrator.empty() && reference.empty())
-            ? "--demonstrator and --reference go with --from human"
+        : command == "demos" && from != "human" &&
+                !(demonstrator.empty() && reference.empty() && !warping_given)
+            ? "--demonstrator, --reference and --warping go with --from human"
             : nullptr;
     if (missing != nullptr) {
       outcome = cli::ParseOutcome::kError;
@@ -426,8 +477,8 @@ int main(int argc, char** argv) {
   try {
     const humanoid::Motion motion = load(motion_name);
     if (command == "demos" && from == "human") {
-      return human_demos(motion, stem_of(motion_name), demonstrator, count, seed, config.threads,
-                         out, reference);
+      return human_demos(motion, stem_of(motion_name), demonstrator, count, seed, warping,
+                         config.threads, out, reference);
     }
     if (command == "demos") return demos(motion, count, from, config, out);
     if (command == "learn")

@@ -266,10 +266,22 @@ std::optional<MotionCheck> check_for(const std::string& name, const Motion& moti
   return std::nullopt;
 }
 
+double longest_flight(const ClosedLoopRun& run) {
+  int longest = 0, flying = 0;
+  flight(run, longest, flying);
+  return longest * run.sampling_period;
+}
+
 double apex_height(const ClosedLoopRun& run) {
   double apex = -1e9;
   for (const ClosedLoopSample& s : run.samples) apex = std::max(apex, s.base.position.z());
   return apex;
+}
+
+double lowest_height(const ClosedLoopRun& run) {
+  double lowest = 1e9;
+  for (const ClosedLoopSample& s : run.samples) lowest = std::min(lowest, s.base.position.z());
+  return lowest;
 }
 
 PhysicalCheck check_motion(const std::string& numeral, const Motion& motion,

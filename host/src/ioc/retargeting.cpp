@@ -6,6 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "hmpc/humanoid/physical_checks.hpp"
+
 namespace hmpc::ioc {
 
 using humanoid::Configuration;
@@ -264,12 +266,35 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
             [&](std::size_t a, std::size_t b) { return mapped[a].size() < mapped[b].size(); });
   const std::vector<Configuration>& reference = mapped[order[order.size() / 2]];
   out.time_scale = std::sqrt(length_scale);
-  const int samples = static_cast<int>(std::floor((reference.size() - 1) * out.time_scale)) + 1;
-  std::vector<double> reference_at(samples);
-  for (int k = 0; k < samples; ++k) reference_at[k] = k / out.time_scale;
-  std::vector<std::vector<State>> warped;
+  std::vector<std::vector<double>> matches;
+  std::vector<std::vector<State>> aligned;
   for (const std::vector<Configuration>& poses : mapped) {
-    const std::vector<double> match = align(poses, reference);
+    matches.push_back(align(poses, reference));
+    std::vector<State> states;
+    for (const Configuration& q : resample(poses, matches.back()))
+      states.push_back({q, humanoid::Velocity::Zero()});
+    aligned.push_back(std::move(states));
+  }
+  // Step 2c on the mean aligned capture, whose samples last kCoarseStep * time_scale of the
+  // robot's time on step 2b's timeline.
+  std::vector<Configuration> mean_aligned;
+  for (const State& x : mean_motion(aligned)) mean_aligned.push_back(x.q);
+  const double nominal_step = humanoid::kCoarseStep * out.time_scale;
+  out.speeds.assign(mean_aligned.size(), 1.0);
+  if (mean_aligned.size() >= 3) {
+    FeasibilityIndex index(config.robot.parameters);
+    out.nominal_index = feasibility_along(mean_aligned, nominal_step, out.speeds, index);
+    if (config.warping == TimeWarping::kFeasibility)
+      out.speeds = feasible_speeds(mean_aligned, nominal_step, index, config.warp);
+    out.warped_index = feasibility_along(mean_aligned, nominal_step, out.speeds, index);
+  }
+  const std::vector<double> reference_at =
+      warped_indices(out.speeds, nominal_step, humanoid::kCoarseStep);
+  const int samples = static_cast<int>(reference_at.size());
+  std::vector<std::vector<State>> warped;
+  for (std::size_t c = 0; c < mapped.size(); ++c) {
+    const std::vector<Configuration>& poses = mapped[c];
+    const std::vector<double>& match = matches[c];
     std::vector<double> at(samples);
     for (int k = 0; k < samples; ++k) {
       const double s = std::min(reference_at[k], static_cast<double>(match.size() - 1));
@@ -293,6 +318,8 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
     TrackedDemonstration t;
     t.fell = run.fell();
     t.errors = motion_errors(tracking, run);
+    t.apex = humanoid::apex_height(run);
+    t.flight = humanoid::longest_flight(run);
     if (!t.fell) t.demonstration = demonstration_of(run);
     if (progress) progress(static_cast<int>(d), t);
     out.tracked.push_back(std::move(t));

@@ -74,8 +74,12 @@ struct MotionCheck {
 std::optional<MotionCheck> check_for(const std::string& name, const Motion& motion,
                                      const ClosedLoopRun& run);
 
-// The highest base point of a run [m] (VII against V).
+// The highest base point of a run [m] (VII against V), and the lowest (a squat's depth).
 double apex_height(const ClosedLoopRun& run);
+double lowest_height(const ClosedLoopRun& run);
+// The longest flight phase of a run [s]: consecutive samples with both feet unloaded, as the
+// jumps' check counts them.
+double longest_flight(const ClosedLoopRun& run);
 
 constexpr double kReachTolerance = 0.05;  // [m] hand to target, see above
 // How a reaching run (Motion::reach) went: the smallest hand-to-target distance at a sample

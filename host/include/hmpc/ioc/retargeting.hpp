@@ -2,8 +2,7 @@
 //  1. Joint-angle mapping [93]: the robot has the demonstrator's joints, so each joint angle
 //     maps to itself, clamped to the robot's range of motion; the base position scales by the
 //     ratio of leg lengths (robot / demonstrator); the attitude is kept.
-//  2. Time warping, in two steps (the thesis's dynamic time warping against a feasibility
-//     index [26] is not coded; what we do instead and why):
+//  2. Time warping, in up to three steps:
 //     a. dynamic time warping aligns every capture onto one reference capture (the one of
 //        median length), which removes the performances' differing timings, so that all
 //        demonstrations share one timeline and one set of targets;
@@ -11,7 +10,11 @@
 //        of a geometrically scaled body under the same gravity needs the same torques per unit
 //        weight and length when its time scales as the square root of its lengths (a flight to a
 //        scaled apex lasts exactly that much less). Played at the demonstrator's speed, the
-//        robot's shorter legs would have to jump relatively higher than the demonstrator did.
+//        robot's shorter legs would have to jump relatively higher than the demonstrator did;
+//     c. with TimeWarping::kFeasibility, the thesis's warping against the motion feasibility
+//        index [26] (feasibility.hpp) bends step b's timeline sample by sample where the mean
+//        aligned capture needs a contact wrench the robot's soles cannot supply; the same
+//        timeline then plays every capture, so they stay aligned.
 //  3. Tracking MPC: the robot's Coarse MPC (untruncated) tracks each warped capture at the
 //     coarse step, its joint angles (CostWeights::joint) and its base's attitude, height and
 //     velocity (Eqs. 4.25-4.27 with the warped capture as the target); the executed run is the
@@ -28,6 +31,7 @@
 #include <vector>
 
 #include "hmpc/ioc/demonstrator.hpp"
+#include "hmpc/ioc/feasibility.hpp"
 #include "hmpc/ioc/local_ioc.hpp"
 
 namespace hmpc::ioc {
@@ -66,8 +70,12 @@ Eigen::Vector3d attitude_angles(const Eigen::Vector4d& quaternion);
 humanoid::Motion motion_along(const std::vector<humanoid::State>& states,
                               const humanoid::Motion& task, const humanoid::ProblemConfig& problem);
 
+enum class TimeWarping { kFroude, kFeasibility };  // steps 2a-b, or 2a-c
+
 struct RetargetConfig {
   humanoid::Parameters demonstrator = demonstrator_parameters();
+  TimeWarping warping = TimeWarping::kFroude;
+  WarpConfig warp{};
   humanoid::ProblemConfig robot{};
   // The tracking MPC's w_joint, by Bryson's rule as the motion files' weights: 0.05 rad.
   double joint_weight = 400.0;
@@ -89,6 +97,9 @@ struct TrackedDemonstration {
   Demonstration demonstration;
   MotionErrors errors;  // of the tracking run against its targets
   bool fell = false;    // the robot fell: no demonstration
+  // The tracking run's highest base point [m] and longest flight phase [s]
+  // (physical_checks.hpp).
+  double apex = 0.0, flight = 0.0;
 };
 
 struct Retargeted {
@@ -97,6 +108,9 @@ struct Retargeted {
   std::vector<humanoid::State> mean;  // the mean tracked motion, every kCoarseStep
   std::vector<TrackedDemonstration> tracked;
   double time_scale = 1.0;  // step 2b's factor
+  // Per sample of the reference capture: step 2c's speed factors (all 1 without it), and the
+  // feasibility index of the mean aligned capture on step 2b's timeline and on the final one.
+  std::vector<double> speeds, nominal_index, warped_index;
 };
 
 // Steps 1-3 for every capture; `task` is the robot's motion for the task (its weights are the
