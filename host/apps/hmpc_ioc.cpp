@@ -225,7 +225,7 @@ int generate(humanoid::Motion motion, const std::string& stem, const std::string
 
 // Step 2c's figures: the feasibility index of the mean aligned capture on the Froude timeline
 // and on the one played, and the speed factors' range and the duration they give.
-void print_warping(const Retargeted& r) {
+void print_warping(const WarpedCaptures& r) {
   if (r.nominal_index.empty()) return;
   const auto rms = [](const std::vector<double>& v) {
     double sum = 0.0;
@@ -240,7 +240,7 @@ void print_warping(const Retargeted& r) {
       "feasibility index (body weights): Froude timeline RMS %.3f, largest %.3f; played "
       "RMS %.3f, largest %.3f; speed factors %.2f..%.2f, %.2f s\n",
       rms(r.nominal_index), largest(r.nominal_index), rms(r.warped_index), largest(r.warped_index),
-      *slowest, *fastest, r.reference.duration);
+      *slowest, *fastest, (r.states.front().size() - 1) * humanoid::kCoarseStep);
 }
 
 int human_demos(const humanoid::Motion& task, const std::string& task_name,
@@ -281,8 +281,8 @@ int human_demos(const humanoid::Motion& task, const std::string& task_name,
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%zu captures, time scale %.3f (Froude), %zu demonstrations in %.1f s\n",
-              captures.size(), r.time_scale, demonstrations.size(), seconds);
-  print_warping(r);
+              captures.size(), r.warping.time_scale, demonstrations.size(), seconds);
+  print_warping(r.warping);
   if (demonstrations.empty())
     return fail("no demonstration: the robot fell in every tracking run", 1);
   if (!save_demonstrations(out, demonstrations)) return fail("cannot write " + out, 1);

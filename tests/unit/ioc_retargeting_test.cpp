@@ -172,6 +172,39 @@ TEST(IocRetargeting, JointTrackingTermWeighsTheLegJoints) {
   for (int j = 0; j < 8; ++j) EXPECT_NEAR(r[18 + j], 2.0 * 0.01 * (j + 1), 1e-15) << j;
 }
 
+TEST(IocRetargeting, FeasibilityWarpingSpeedsUpAFlightUnderHalfGravity) {
+  // Two captures of a demonstrator in the air, its base rising and falling under g / 2. Step 1
+  // scales lengths by l = l_robot / l_demonstrator and step 2b time by sqrt(l), which keeps
+  // accelerations: the robot's flight is still under g / 2, half its weight missing. Step 2c plays
+  // it sqrt(2) times faster, where it is ballistic (in exp(0.05 j) levels); one timeline plays
+  // both captures.
+  constexpr int kPoses = 21;
+  Capture flight;
+  for (int k = 0; k < kPoses; ++k) {
+    const double t = k * humanoid::kCoarseStep;
+    Configuration q = standing_pose();
+    q[2] = 1.2 + 1.5 * t - 0.25 * 9.81 * t * t;
+    flight.poses.push_back(q);
+  }
+  RetargetConfig config;
+  const WarpedCaptures froude = warp_captures({flight, flight}, config);
+  config.warping = TimeWarping::kFeasibility;
+  const WarpedCaptures warped = warp_captures({flight, flight}, config);
+  ASSERT_EQ(warped.states.size(), 2u);
+  ASSERT_EQ(froude.speeds.size(), static_cast<std::size_t>(kPoses));
+  for (const double s : froude.speeds) EXPECT_EQ(s, 1.0);
+  EXPECT_EQ(froude.states.front().size(),
+            static_cast<std::size_t>(std::floor((kPoses - 1) * froude.time_scale)) + 1);
+  // The low-pass filter's window, renormalised, bends the parabola within two samples of each
+  // end, and the acceleration's stencil spans two more.
+  for (int k = 4; k < kPoses - 4; ++k) {
+    EXPECT_NEAR(std::log(warped.speeds[k]), 0.5 * std::log(2.0), 0.06) << "sample " << k;
+    EXPECT_NEAR(froude.nominal_index[k], 0.5, 0.05) << "sample " << k;
+    EXPECT_LT(warped.warped_index[k], 0.1) << "sample " << k;
+  }
+  EXPECT_EQ(warped.states.front().size(), warped.states.back().size());
+}
+
 TEST(IocRetargeting, RejectsBadCapturesAndSettings) {
   const humanoid::Motion task = test::jump_motion();
   EXPECT_THROW(retarget({}, task, RetargetConfig{}), std::invalid_argument);

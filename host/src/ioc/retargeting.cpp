@@ -112,12 +112,13 @@ std::vector<double> align(const std::vector<Configuration>& poses,
   }
   std::vector<double> index(n), smooth(n);
   for (int k = 0; k < n; ++k) index[k] = sum[k] / matches[k];
-  // DTW's staircase would make standstills and jumps of the velocities: a 5-sample average.
+  // DTW's staircase would make standstills and jumps of the velocities: a 5-sample average,
+  // narrowed symmetrically at the ends so that a uniform match stays exact there.
   for (int k = 0; k < n; ++k) {
+    const int half = std::min({2, k, n - 1 - k});
     double total = 0.0;
-    int count = 0;
-    for (int l = std::max(0, k - 2); l <= std::min(n - 1, k + 2); ++l, ++count) total += index[l];
-    smooth[k] = total / count;
+    for (int l = k - half; l <= k + half; ++l) total += index[l];
+    smooth[k] = total / (2 * half + 1);
   }
   for (int k = 1; k < n; ++k) smooth[k] = std::max(smooth[k], smooth[k - 1]);
   return smooth;
@@ -241,14 +242,12 @@ std::vector<State> mean_motion(const std::vector<std::vector<State>>& motions) {
 
 }  // namespace
 
-Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion& task,
-                    const RetargetConfig& config,
-                    const std::function<void(int index, const TrackedDemonstration&)>& progress) {
+WarpedCaptures warp_captures(const std::vector<Capture>& captures, const RetargetConfig& config) {
   if (captures.empty()) throw std::invalid_argument("retarget: no captures");
   for (const Capture& c : captures) {
     if (c.poses.size() < 2) throw std::invalid_argument("retarget: a capture shorter than 2 poses");
   }
-  Retargeted out;
+  WarpedCaptures out;
   // Step 1, after the capture's low-pass filter.
   const double length_scale = leg_length(config.robot.parameters) / leg_length(config.demonstrator);
   std::vector<std::vector<Configuration>> mapped;
@@ -281,7 +280,7 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
   for (const State& x : mean_motion(aligned)) mean_aligned.push_back(x.q);
   const double nominal_step = humanoid::kCoarseStep * out.time_scale;
   out.speeds.assign(mean_aligned.size(), 1.0);
-  if (mean_aligned.size() >= 3) {
+  if (mean_aligned.size() >= kMinPoses) {
     FeasibilityIndex index(config.robot.parameters);
     out.nominal_index = feasibility_along(mean_aligned, nominal_step, out.speeds, index);
     if (config.warping == TimeWarping::kFeasibility)
@@ -291,7 +290,6 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
   const std::vector<double> reference_at =
       warped_indices(out.speeds, nominal_step, humanoid::kCoarseStep);
   const int samples = static_cast<int>(reference_at.size());
-  std::vector<std::vector<State>> warped;
   for (std::size_t c = 0; c < mapped.size(); ++c) {
     const std::vector<Configuration>& poses = mapped[c];
     const std::vector<double>& match = matches[c];
@@ -302,8 +300,17 @@ Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion
           std::min(static_cast<int>(s), static_cast<int>(match.size()) - 2);  // match has >= 2
       at[k] = match[i] + (s - i) * (match[i + 1] - match[i]);
     }
-    warped.push_back(with_velocities(resample(poses, at), humanoid::kCoarseStep));
+    out.states.push_back(with_velocities(resample(poses, at), humanoid::kCoarseStep));
   }
+  return out;
+}
+
+Retargeted retarget(const std::vector<Capture>& captures, const humanoid::Motion& task,
+                    const RetargetConfig& config,
+                    const std::function<void(int index, const TrackedDemonstration&)>& progress) {
+  Retargeted out;
+  out.warping = warp_captures(captures, config);
+  const std::vector<std::vector<State>>& warped = out.warping.states;
   // Step 3.
   humanoid::ClosedLoopConfig run_config;
   run_config.mpc = humanoid::MpcKind::kCoarse;

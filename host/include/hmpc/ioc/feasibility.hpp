@@ -66,8 +66,10 @@ struct WarpConfig {
 
 // Per-sample speed factors sigma_i for `poses` sampled `step` apart on the nominal timeline: the
 // minimum over the levels of the costs above (a Viterbi pass over the samples). Velocities are
-// central differences, accelerations second differences, scaled by sigma / step per derivative.
-// Throws std::invalid_argument for fewer than 3 poses or a step <= 0.
+// central differences, accelerations second differences over two samples, scaled by
+// sigma / step per derivative. Throws std::invalid_argument for fewer than kMinPoses poses or a
+// step <= 0.
+constexpr std::size_t kMinPoses = 5;  // the acceleration's stencil
 std::vector<double> feasible_speeds(const std::vector<humanoid::Configuration>& poses, double step,
                                     FeasibilityIndex& index,
                                     const WarpConfig& config = WarpConfig{});

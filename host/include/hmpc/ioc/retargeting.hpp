@@ -48,7 +48,7 @@ humanoid::Configuration map_pose(const humanoid::Configuration& pose, double len
 
 // Step 2a: for each pose of `reference`, the (fractional) index of the pose of `poses` that
 // dynamic time warping matches to it, over base height, attitude and joint angles; the match
-// is smoothed over 5 samples and kept non-decreasing.
+// is smoothed over 5 samples (fewer at the ends, symmetrically) and kept non-decreasing.
 std::vector<double> align(const std::vector<humanoid::Configuration>& poses,
                           const std::vector<humanoid::Configuration>& reference);
 
@@ -102,16 +102,27 @@ struct TrackedDemonstration {
   double apex = 0.0, flight = 0.0;
 };
 
+// Steps 1-2's result.
+struct WarpedCaptures {
+  std::vector<std::vector<humanoid::State>> states;  // per capture, every kCoarseStep
+  double time_scale = 1.0;                           // step 2b's factor
+  // Per sample of the reference capture: step 2c's speed factors (all 1 without it), and the
+  // feasibility index of the mean aligned capture on step 2b's timeline and on the final one
+  // (empty for a reference shorter than kMinPoses).
+  std::vector<double> speeds, nominal_index, warped_index;
+};
+
 struct Retargeted {
   // Targets of the demonstrated behaviour (the mean tracked motion), `task`'s weights.
   humanoid::Motion reference;
   std::vector<humanoid::State> mean;  // the mean tracked motion, every kCoarseStep
   std::vector<TrackedDemonstration> tracked;
-  double time_scale = 1.0;  // step 2b's factor
-  // Per sample of the reference capture: step 2c's speed factors (all 1 without it), and the
-  // feasibility index of the mean aligned capture on step 2b's timeline and on the final one.
-  std::vector<double> speeds, nominal_index, warped_index;
+  WarpedCaptures warping;
 };
+
+// Steps 1-2 for every capture. Throws std::invalid_argument without captures or if one is
+// shorter than 2 poses.
+WarpedCaptures warp_captures(const std::vector<Capture>& captures, const RetargetConfig& config);
 
 // Steps 1-3 for every capture; `task` is the robot's motion for the task (its weights are the
 // tracking MPC's, with w_joint added, and the targets' other settings). `progress` hears of
