@@ -327,13 +327,8 @@ int compare(const humanoid::Motion& motion, const std::string& stem,
       return fail(error, 1);
     }
   }
-  double high = -1e9, low = 1e9;
-  for (double t = 0.0; t <= motion.duration; t += 0.01) {
-    const double height = motion.phase_at(t).height_at(t);
-    high = std::max(high, height);
-    low = std::min(low, height);
-  }
-  std::printf("targets: base height %.3f..%.3f m\n", low, high);
+  const HeightRange targets = target_heights(motion);
+  std::printf("targets: base height %.3f..%.3f m\n", targets.lowest, targets.highest);
   std::printf("%-28s %10s %10s\n", "RMS error against targets", "initial", "learned");
   std::printf("%-28s %10.4f %10.4f\n", "base height [m]", errors[0].height, errors[1].height);
   std::printf("%-28s %10.4f %10.4f\n", "attitude [rad]", errors[0].attitude, errors[1].attitude);

@@ -215,6 +215,16 @@ MotionErrors motion_errors(const humanoid::Motion& targets, const humanoid::Clos
   return e;
 }
 
+HeightRange target_heights(const humanoid::Motion& motion) {
+  HeightRange r{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (int k = 0; k * 0.01 <= motion.duration; ++k) {
+    const double t = k * 0.01, height = motion.phase_at(t).height_at(t);
+    r.lowest = std::min(r.lowest, height);
+    r.highest = std::max(r.highest, height);
+  }
+  return r;
+}
+
 namespace {
 
 // Sample by sample over equally long motions; quaternions summed with the first motion's sign,

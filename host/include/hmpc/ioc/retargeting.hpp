@@ -93,6 +93,13 @@ struct MotionErrors {
 };
 MotionErrors motion_errors(const humanoid::Motion& targets, const humanoid::ClosedLoopRun& run);
 
+// The lowest and highest base point height a motion targets over its duration [m] (every 10
+// ms): a demonstrated behaviour's squat depth and jump apex.
+struct HeightRange {
+  double lowest = 0.0, highest = 0.0;
+};
+HeightRange target_heights(const humanoid::Motion& motion);
+
 struct TrackedDemonstration {
   Demonstration demonstration;
   MotionErrors errors;  // of the tracking run against its targets
