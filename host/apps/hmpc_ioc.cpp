@@ -53,7 +53,9 @@ void usage(std::FILE* out) {
       "      " HMPC_IOC_DEMONSTRATORS
       "), retargeted to the robot and tracked by its Coarse\n"
       "      MPC (the motion gives the tracking weights); writes the demonstrations and, to\n"
-      "      --reference, the demonstrated behaviour as a motion file for learn/generate/compare\n"
+      "      --reference, the demonstrated behaviour as a motion file for learn/generate/compare;\n"
+      "      time is scaled by Froude similarity, and with --warping feasibility then bent by\n"
+      "      the motion feasibility index (Sec. 4.2.1)\n"
       "  hmpc-ioc learn --motion NAME|FILE --demos FILE --out FILE [--iterations N] [--threads T]\n"
       "      [--estimator likelihood|excess-cost]\n"
       "      [--publish-domain D [--dds-loopback] [--publish-timeout S]]\n"
