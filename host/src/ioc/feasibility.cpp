@@ -85,7 +85,7 @@ double FeasibilityIndex::operator()(const Configuration& q, const humanoid::Velo
   // The wrench the contacts must supply: M a + c = tau + J'f with the base unactuated, so the
   // base rows of the RNEA (torso coordinates, moment about the torso origin first).
   const humanoid::Velocity tau = dynamics_.inverse_dynamics(q, v, a);
-  dynamics_.kinematics(q, v, kinematics_);
+  dynamics_.kinematics(v, kinematics_);  // at q, reusing the RNEA's joint transforms
   const humanoid::Matrix3& R = kinematics_.rotation[0];
   const humanoid::Vector3& origin = kinematics_.position[0];
   Vector6 needed;
@@ -96,20 +96,20 @@ double FeasibilityIndex::operator()(const Configuration& q, const humanoid::Velo
   const double tangent = config_.friction / std::sqrt(2.0);
   const humanoid::Vector3 edges[kEdges] = {
       {tangent, 0.0, 1.0}, {-tangent, 0.0, 1.0}, {0.0, tangent, 1.0}, {0.0, -tangent, 1.0}};
-  Generators G(6, 0);
+  Generators G(6, kGenerators);
   contacts_ = 0;
   for (int i = 0; i < humanoid::kSolePoints; ++i) {
     const humanoid::ContactPoint& point = contact_.point(i);
     const humanoid::Vector3 p =
         kinematics_.position[point.body] + kinematics_.rotation[point.body] * point.local;
     if (p.z() > config_.contact_height) continue;
-    ++contacts_;
-    for (const humanoid::Vector3& edge : edges) {
-      const humanoid::Vector3 e = edge.normalized();
-      G.conservativeResize(6, G.cols() + 1);
-      G.col(G.cols() - 1) << moment_scale_ * (p - origin).cross(e), force_scale_ * e;
+    for (int j = 0; j < kEdges; ++j) {
+      const humanoid::Vector3 e = edges[j].normalized();
+      G.col(kEdges * contacts_ + j) << moment_scale_ * (p - origin).cross(e), force_scale_ * e;
     }
+    ++contacts_;
   }
+  G.conservativeResize(6, kEdges * contacts_);
   return cone_distance(G, needed);
 }
 
