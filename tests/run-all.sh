@@ -10,13 +10,9 @@
 #   aarch64       ARM64 Linux (the firmware side), tests under qemu-aarch64
 # The sanitizer and cross presets leave out the long tests, which host-release runs once.
 #
-# Two cores. The vcan tests are the longest chain: each runs in a QEMU guest on one core (where
-# the kernel has no vcan), and a native vcan0 would be shared, so no two presets' vcan tests run
-# at once. The Release ones start as soon as Release is built, in the background (their output
-# is kept and printed when they end); every other preset builds beside them, then every test
-# that needs no vcan runs beside them too, each ctest with a TMPDIR of its own, except the
-# sanitizer's DDS tests (label threads), which wait with its vcan tests: the Release DDS tests
-# use the same domain ids.
+# Two cores: a build uses both, but a preset's tests spend much of their time in the vcan guest
+# on one, so the next presets build while the previous ones test (their output is kept and
+# printed when they end). Only one preset tests at a time: the vcan tests share vcan0.
 # Installs missing Debian packages first (toolchains/setup-debian.sh). Prints each step's time
 # and, at the end, a table of them.
 set -euo pipefail
@@ -36,11 +32,11 @@ step() {  # step NAME COMMAND...: runs COMMAND in the foreground, records its ti
   echo "==== ${name}: $((SECONDS - start)) s ===="
 }
 background=() background_name="" background_start=0 background_log=""
-start_tests() {  # start_tests PRESET CTEST-ARGS...: a ctest in the background, output to a log
-  background_name="$1 test $2 $3 (background)" background_start=$SECONDS
+start_tests() {  # start_tests PRESET: its ctest in the background, output to a log
+  background_name="$1 test (background)" background_start=$SECONDS
   background_log="build/$1-ctest.log"
   echo "==== ${background_name}: started, output in ${background_log} ===="
-  ctest --preset "$@" > "$background_log" 2>&1 &
+  ctest --preset "$1" > "$background_log" 2>&1 &
   background=($!)
 }
 finish_tests() {  # waits for the background ctest, prints its output, fails if it failed
@@ -68,28 +64,19 @@ build() {  # build PRESET: configure and build
   step "$1 build" cmake --build --preset "$1"
 }
 
-beside_release() {  # beside_release NAME CTEST-ARGS...: a step with a TMPDIR of its own
-  local name=$1 tmp
-  shift
-  tmp=$(mktemp -d)
-  step "$name" env TMPDIR="$tmp" ctest "$@"
-  rm -rf "$tmp"
-}
-
 step setup bash toolchains/setup-debian.sh
 mkdir -p build
 build host-release
-start_tests host-release -L vcan
-for preset in host-asan host-tsan cortex-m7 cortex-m4 aarch64; do
-  build "$preset"
-done
-beside_release "host-release test -LE vcan" --preset host-release -LE vcan
-# -LE replaces the preset's excluded label (long), so it is named again.
-beside_release "host-asan test -LE 'long|vcan|threads'" --preset host-asan -LE 'long|vcan|threads'
-for preset in cortex-m7 cortex-m4 aarch64; do
-  beside_release "${preset} test" --preset "$preset"
-done
+start_tests host-release
+build host-asan
+build host-tsan
 finish_tests
-step "host-asan test -L 'vcan|threads'" ctest --preset host-asan -L 'vcan|threads'
-step "host-tsan test" ctest --preset host-tsan
+start_tests host-asan
+build cortex-m7
+build cortex-m4
+build aarch64
+finish_tests
+for preset in host-tsan cortex-m7 cortex-m4 aarch64; do
+  step "${preset} test" ctest --preset "${preset}"
+done
 echo "==== all presets passed: host-release host-asan host-tsan cortex-m7 cortex-m4 aarch64 ===="
