@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "hmpc/humanoid/coarse_fast.hpp"
 #include "hmpc/humanoid/problem.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "hmpc/solver/ilqr.hpp"
@@ -302,10 +303,10 @@ TEST(HumanoidProblem, TorqueChangeIsTheSolversChangePenaltyAgainstTheAppliedTorq
       << "the solver adds the term, not the running cost";
 }
 
-// One iLQR solve of a short horizon, with or without a pool.
+// One capped iLQR solve of the coarse problem, with or without a pool.
 struct Solve {
-  using Problem = HumanoidProblem<4>;
-  using Solver = hmpc::Ilqr<Problem, 4>;
+  using Problem = HumanoidProblem<kCoarseHorizon>;
+  using Solver = hmpc::Ilqr<Problem, kCoarseHorizon>;
   StateVector x0 = to_vector(standing());
   std::unique_ptr<Problem> problem;
   std::unique_ptr<Solver> solver;
@@ -328,12 +329,12 @@ TEST(HumanoidProblem, ParallelLinearisationIsBitIdenticalToSerial) {
     const auto result = parallel.run();
     EXPECT_EQ(result.iterations, reference.iterations) << threads << " threads";
     EXPECT_EQ(result.cost, reference.cost) << threads << " threads";
-    for (int t = 0; t < 4; ++t) {
+    for (int t = 0; t < kCoarseHorizon; ++t) {
       EXPECT_EQ(parallel.solver->controls()[t], serial.solver->controls()[t]) << "step " << t;
       EXPECT_EQ(parallel.solver->feedback_gains()[t], serial.solver->feedback_gains()[t])
           << "step " << t;
     }
-    EXPECT_EQ(parallel.solver->states()[4], serial.solver->states()[4]);
+    EXPECT_EQ(parallel.solver->states().back(), serial.solver->states().back());
   }
 }
 

@@ -394,51 +394,13 @@ class Ilqr {
 
   // Trajectory cost of lane `lane`'s candidate, Eq. 2.2; +inf if any state or cost term is
   // not finite. Counts the work in lane_steps_ (lanes may run concurrently).
-  Scalar candidate_cost(const Problem& problem, int lane) {
-    const StateTrajectory& x = x_new_[lane];
-    const ControlTrajectory& u = u_new_[lane];
-    lane_steps_[lane] = N;
-    Scalar cost = 0;
-    for (int t = 0; t < N; ++t) cost += problem.running_cost(x[t], u[t], t);
-    cost += problem.terminal_cost(x[N], N);
-    if (changes_) {
-      for (int t = 0; t < N; ++t) {
-        const Control change = u[t] - (t > 0 ? u[t - 1] : previous_);
-        cost += change.dot(change_weight_.cwiseProduct(change));
-      }
-    }
-    return std::isfinite(cost) ? cost : std::numeric_limits<Scalar>::infinity();
-  }
+  Scalar candidate_cost(const Problem& problem, int lane);
 
-  Scalar rollout_open_loop(const Problem& problem, const State& x0) {
-    StateTrajectory& x = x_new_[0];
-    ControlTrajectory& u = u_new_[0];
-    lane_steps_[0] = 0;
-    x[0] = x0;
-    for (int t = 0; t < N; ++t) {
-      u[t] = clamp(u_[t], t);
-      x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, 0);
-      if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
-    }
-    return candidate_cost(problem, 0);
-  }
+  Scalar rollout_open_loop(const Problem& problem, const State& x0);
 
   // Eq. 2.18-2.20 with the line-search step alpha on the feedforward term k_t of Eq. 2.12,
   // into lane `lane`'s candidate.
-  Scalar rollout_closed_loop(const Problem& problem, const State& x0, Scalar alpha, int lane) {
-    StateTrajectory& x = x_new_[lane];
-    ControlTrajectory& u = u_new_[lane];
-    lane_steps_[lane] = 0;
-    x[0] = x0;
-    for (int t = 0; t < N; ++t) {
-      Control ut = u_[t] + alpha * k_[t] + K_[t] * (x[t] - x_[t]);
-      if (changes_ && t > 0) ut += Kp_[t] * (u[t - 1] - u_[t - 1]);  // dp_0 = 0: u_{-1} is given
-      u[t] = clamp(ut, t);
-      x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, lane);
-      if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
-    }
-    return candidate_cost(problem, lane);
-  }
+  Scalar rollout_closed_loop(const Problem& problem, const State& x0, Scalar alpha, int lane);
 
   void commit_candidate(Scalar cost, int lane = 0) {
     x_ = x_new_[lane];
@@ -446,110 +408,11 @@ class Ilqr {
     cost_ = cost;
   }
 
-  bool compute_derivatives(const Problem& problem) {
-    work_.derivative_steps += N;
-    // The steps are independent: the problem decides where they run (problem.hpp).
-    problem.for_each_step(N, [&](int t) {
-      problem.dynamics_derivatives(x_[t], u_[t], t, fx_[t], fu_[t]);
-      problem.running_cost_derivatives(x_[t], u_[t], t, running_[t]);
-    });
-    for (int t = 0; t < N; ++t) {
-      if (!fx_[t].allFinite() || !fu_[t].allFinite() || !running_[t].lx.allFinite() ||
-          !running_[t].lu.allFinite() || !running_[t].lxx.allFinite() ||
-          !running_[t].luu.allFinite() || !running_[t].lux.allFinite())
-        return false;
-    }
-    problem.terminal_cost_derivatives(x_[N], N, terminal_);
-    return terminal_.lx.allFinite() && terminal_.lxx.allFinite();
-  }
+  bool compute_derivatives(const Problem& problem);
 
   // One backward sweep. Returns false when Q_uu + mu I is not positive definite at some step
   // (or the result is not finite), in which case the caller raises mu and repeats.
-  bool backward_pass(Scalar& expected_linear, Scalar& expected_quadratic) {
-    expected_linear = 0;
-    expected_quadratic = 0;
-    State Vx = terminal_.lx;  // V_N = l_T (text after Eq. 2.16)
-    StateJacobian Vxx = terminal_.lxx;
-    // The value function's terms in the previous input p (a change penalty only): V_N has none.
-    Control Vp = Control::Zero();
-    ControlMatrix Vpp = ControlMatrix::Zero();
-    ControlJacobian Vxp = ControlJacobian::Zero();
-    for (int t = N - 1; t >= 0; --t) {
-      ++work_.backward_steps;
-      const StateJacobian& A = fx_[t];
-      const ControlJacobian& B = fu_[t];
-      const RunningDerivatives& l = running_[t];
-      const Eigen::Matrix<Scalar, kStateDim, kControlDim> VxxB = Vxx * B;
-      const State Qx = l.lx + A.transpose() * Vx;                 // Eq. 2.7
-      Control Qu = l.lu + B.transpose() * Vx;                     // Eq. 2.8
-      const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;  // Eq. 2.9
-      Gain Qux = l.lux + VxxB.transpose() * A;                    // Eq. 2.10
-      ControlMatrix Quu = l.luu + B.transpose() * VxxB;           // Eq. 2.11
-      // The change penalty c = (u - p)' W (u - p) and p' = u: c_u = 2W(u - p) = -c_p,
-      // c_uu = c_pp = 2W = -c_up; the next value's p-terms enter through du as they would
-      // through a Jacobian [B; I]. Nothing in x's rows changes: p' and c do not depend on x.
-      Control Qp = Control::Zero();
-      ControlMatrix Qpp = ControlMatrix::Zero();
-      ControlMatrix Qup = ControlMatrix::Zero();
-      if (changes_) {
-        const Control two_w = Scalar(2) * change_weight_;
-        const Control change = u_[t] - (t > 0 ? u_[t - 1] : previous_);
-        const ControlMatrix BtVxp = B.transpose() * Vxp;
-        Qu += two_w.cwiseProduct(change) + Vp;
-        Qux += Vxp.transpose() * A;
-        Quu += ControlMatrix(two_w.asDiagonal()) + BtVxp + BtVxp.transpose() + Vpp;
-        Qp = -two_w.cwiseProduct(change);
-        Qpp = two_w.asDiagonal();
-        Qup = -Qpp;
-      }
-      const ControlMatrix Quu_reg = Quu + mu_ * ControlMatrix::Identity();  // LM term
-
-      if (bounded_) {
-        // box-DDP: k from the box QP around the nominal control; K on the free set only.
-        solve_box_qp(Quu_reg, Qu, Control(lower_[t] - u_[t]), Control(upper_[t] - u_[t]), k_[t],
-                     box_, box_config_);
-        if (!box_.usable()) return false;
-        k_[t] = box_.x;
-        for (int j = 0; j < kStateDim; ++j)
-          K_[t].col(j) = -box_.free_factor.solve(Qux.col(j).cwiseProduct(box_.free_mask));
-        if (changes_) {
-          for (int j = 0; j < kControlDim; ++j)
-            Kp_[t].col(j) = -box_.free_factor.solve(Qup.col(j).cwiseProduct(box_.free_mask));
-        }
-      } else {
-        llt_.compute(Quu_reg);
-        if (llt_.info() != Eigen::Success) return false;
-        k_[t] = -llt_.solve(Qu);  // Eq. 2.12
-        // Gains column by column: a matrix right-hand side takes Eigen's blocked triangular
-        // solver, which may allocate (the firmware's heap guard refuses to link it).
-        for (int j = 0; j < kStateDim; ++j) K_[t].col(j) = -llt_.solve(Qux.col(j));
-        if (changes_) {
-          for (int j = 0; j < kControlDim; ++j) Kp_[t].col(j) = -llt_.solve(Qup.col(j));
-        }
-      }
-      const Control& k = k_[t];
-      const Gain& K = K_[t];
-      if (!k.allFinite() || !K.allFinite()) return false;
-
-      expected_linear += k.dot(Qu);  // Eq. 2.14
-      expected_quadratic += Scalar(0.5) * k.dot(Quu * k);
-      // Eqs. 2.15-2.16 in the form that stays exact when k, K are not the unconstrained
-      // minimisers (clamped directions, regularisation): Tassa et al. 2012, Eq. 11.
-      Vx = Qx + K.transpose() * (Quu * k) + K.transpose() * Qu + Qux.transpose() * k;
-      Vxx = Qxx + K.transpose() * Quu * K + K.transpose() * Qux + Qux.transpose() * K;
-      Vxx = Scalar(0.5) * (Vxx + Vxx.transpose()).eval();
-      if (changes_) {
-        // The same formula on the augmented state's p rows, with Q_xp = 0.
-        const ControlMatrix& Kp = Kp_[t];
-        if (!Kp.allFinite()) return false;
-        Vp = Qp + Kp.transpose() * (Quu * k) + Kp.transpose() * Qu + Qup.transpose() * k;
-        Vpp = Qpp + Kp.transpose() * Quu * Kp + Kp.transpose() * Qup + Qup.transpose() * Kp;
-        Vpp = Scalar(0.5) * (Vpp + Vpp.transpose()).eval();
-        Vxp = K.transpose() * Quu * Kp + K.transpose() * Qup + Qux.transpose() * Kp;
-      }
-    }
-    return true;
-  }
+  bool backward_pass(Scalar& expected_linear, Scalar& expected_quadratic);
 
   // Mean over the horizon of max_i |k_i| / (|u_i| + 1): iLQG's gradient-based stop.
   Scalar feedforward_norm() const {
@@ -604,5 +467,166 @@ class Ilqr {
   BoxQpSolution<Scalar, kControlDim> box_;
   Eigen::LLT<ControlMatrix> llt_;
 };
+
+// The heavy members are defined outside the class, so that they are not inline: a header that
+// declares an `extern template class Ilqr<P, N>` keeps every file including it from compiling
+// them again for P (the humanoid's problems: a fixed-size backward pass takes GCC tens of
+// seconds), and one source instantiates them.
+
+template <class Problem, int N>
+typename Ilqr<Problem, N>::Scalar Ilqr<Problem, N>::candidate_cost(const Problem& problem,
+                                                                   int lane) {
+  const StateTrajectory& x = x_new_[lane];
+  const ControlTrajectory& u = u_new_[lane];
+  lane_steps_[lane] = N;
+  Scalar cost = 0;
+  for (int t = 0; t < N; ++t) cost += problem.running_cost(x[t], u[t], t);
+  cost += problem.terminal_cost(x[N], N);
+  if (changes_) {
+    for (int t = 0; t < N; ++t) {
+      const Control change = u[t] - (t > 0 ? u[t - 1] : previous_);
+      cost += change.dot(change_weight_.cwiseProduct(change));
+    }
+  }
+  return std::isfinite(cost) ? cost : std::numeric_limits<Scalar>::infinity();
+}
+
+template <class Problem, int N>
+typename Ilqr<Problem, N>::Scalar Ilqr<Problem, N>::rollout_open_loop(const Problem& problem,
+                                                                      const State& x0) {
+  StateTrajectory& x = x_new_[0];
+  ControlTrajectory& u = u_new_[0];
+  lane_steps_[0] = 0;
+  x[0] = x0;
+  for (int t = 0; t < N; ++t) {
+    u[t] = clamp(u_[t], t);
+    x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, 0);
+    if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
+  }
+  return candidate_cost(problem, 0);
+}
+
+template <class Problem, int N>
+typename Ilqr<Problem, N>::Scalar Ilqr<Problem, N>::rollout_closed_loop(const Problem& problem,
+                                                                        const State& x0,
+                                                                        Scalar alpha, int lane) {
+  StateTrajectory& x = x_new_[lane];
+  ControlTrajectory& u = u_new_[lane];
+  lane_steps_[lane] = 0;
+  x[0] = x0;
+  for (int t = 0; t < N; ++t) {
+    Control ut = u_[t] + alpha * k_[t] + K_[t] * (x[t] - x_[t]);
+    if (changes_ && t > 0) ut += Kp_[t] * (u[t - 1] - u_[t - 1]);  // dp_0 = 0: u_{-1} is given
+    u[t] = clamp(ut, t);
+    x[t + 1] = problem.rollout_dynamics(x[t], u[t], t, lane);
+    if (!x[t + 1].allFinite()) return std::numeric_limits<Scalar>::infinity();
+  }
+  return candidate_cost(problem, lane);
+}
+
+template <class Problem, int N>
+bool Ilqr<Problem, N>::compute_derivatives(const Problem& problem) {
+  work_.derivative_steps += N;
+  // The steps are independent: the problem decides where they run (problem.hpp).
+  problem.for_each_step(N, [&](int t) {
+    problem.dynamics_derivatives(x_[t], u_[t], t, fx_[t], fu_[t]);
+    problem.running_cost_derivatives(x_[t], u_[t], t, running_[t]);
+  });
+  for (int t = 0; t < N; ++t) {
+    if (!fx_[t].allFinite() || !fu_[t].allFinite() || !running_[t].lx.allFinite() ||
+        !running_[t].lu.allFinite() || !running_[t].lxx.allFinite() ||
+        !running_[t].luu.allFinite() || !running_[t].lux.allFinite())
+      return false;
+  }
+  problem.terminal_cost_derivatives(x_[N], N, terminal_);
+  return terminal_.lx.allFinite() && terminal_.lxx.allFinite();
+}
+
+template <class Problem, int N>
+bool Ilqr<Problem, N>::backward_pass(Scalar& expected_linear, Scalar& expected_quadratic) {
+  expected_linear = 0;
+  expected_quadratic = 0;
+  State Vx = terminal_.lx;  // V_N = l_T (text after Eq. 2.16)
+  StateJacobian Vxx = terminal_.lxx;
+  // The value function's terms in the previous input p (a change penalty only): V_N has none.
+  Control Vp = Control::Zero();
+  ControlMatrix Vpp = ControlMatrix::Zero();
+  ControlJacobian Vxp = ControlJacobian::Zero();
+  for (int t = N - 1; t >= 0; --t) {
+    ++work_.backward_steps;
+    const StateJacobian& A = fx_[t];
+    const ControlJacobian& B = fu_[t];
+    const RunningDerivatives& l = running_[t];
+    const Eigen::Matrix<Scalar, kStateDim, kControlDim> VxxB = Vxx * B;
+    const State Qx = l.lx + A.transpose() * Vx;                 // Eq. 2.7
+    Control Qu = l.lu + B.transpose() * Vx;                     // Eq. 2.8
+    const StateJacobian Qxx = l.lxx + A.transpose() * Vxx * A;  // Eq. 2.9
+    Gain Qux = l.lux + VxxB.transpose() * A;                    // Eq. 2.10
+    ControlMatrix Quu = l.luu + B.transpose() * VxxB;           // Eq. 2.11
+    // The change penalty c = (u - p)' W (u - p) and p' = u: c_u = 2W(u - p) = -c_p,
+    // c_uu = c_pp = 2W = -c_up; the next value's p-terms enter through du as they would
+    // through a Jacobian [B; I]. Nothing in x's rows changes: p' and c do not depend on x.
+    Control Qp = Control::Zero();
+    ControlMatrix Qpp = ControlMatrix::Zero();
+    ControlMatrix Qup = ControlMatrix::Zero();
+    if (changes_) {
+      const Control two_w = Scalar(2) * change_weight_;
+      const Control change = u_[t] - (t > 0 ? u_[t - 1] : previous_);
+      const ControlMatrix BtVxp = B.transpose() * Vxp;
+      Qu += two_w.cwiseProduct(change) + Vp;
+      Qux += Vxp.transpose() * A;
+      Quu += ControlMatrix(two_w.asDiagonal()) + BtVxp + BtVxp.transpose() + Vpp;
+      Qp = -two_w.cwiseProduct(change);
+      Qpp = two_w.asDiagonal();
+      Qup = -Qpp;
+    }
+    const ControlMatrix Quu_reg = Quu + mu_ * ControlMatrix::Identity();  // LM term
+
+    if (bounded_) {
+      // box-DDP: k from the box QP around the nominal control; K on the free set only.
+      solve_box_qp(Quu_reg, Qu, Control(lower_[t] - u_[t]), Control(upper_[t] - u_[t]), k_[t], box_,
+                   box_config_);
+      if (!box_.usable()) return false;
+      k_[t] = box_.x;
+      for (int j = 0; j < kStateDim; ++j)
+        K_[t].col(j) = -box_.free_factor.solve(Qux.col(j).cwiseProduct(box_.free_mask));
+      if (changes_) {
+        for (int j = 0; j < kControlDim; ++j)
+          Kp_[t].col(j) = -box_.free_factor.solve(Qup.col(j).cwiseProduct(box_.free_mask));
+      }
+    } else {
+      llt_.compute(Quu_reg);
+      if (llt_.info() != Eigen::Success) return false;
+      k_[t] = -llt_.solve(Qu);  // Eq. 2.12
+      // Gains column by column: a matrix right-hand side takes Eigen's blocked triangular
+      // solver, which may allocate (the firmware's heap guard refuses to link it).
+      for (int j = 0; j < kStateDim; ++j) K_[t].col(j) = -llt_.solve(Qux.col(j));
+      if (changes_) {
+        for (int j = 0; j < kControlDim; ++j) Kp_[t].col(j) = -llt_.solve(Qup.col(j));
+      }
+    }
+    const Control& k = k_[t];
+    const Gain& K = K_[t];
+    if (!k.allFinite() || !K.allFinite()) return false;
+
+    expected_linear += k.dot(Qu);  // Eq. 2.14
+    expected_quadratic += Scalar(0.5) * k.dot(Quu * k);
+    // Eqs. 2.15-2.16 in the form that stays exact when k, K are not the unconstrained
+    // minimisers (clamped directions, regularisation): Tassa et al. 2012, Eq. 11.
+    Vx = Qx + K.transpose() * (Quu * k) + K.transpose() * Qu + Qux.transpose() * k;
+    Vxx = Qxx + K.transpose() * Quu * K + K.transpose() * Qux + Qux.transpose() * K;
+    Vxx = Scalar(0.5) * (Vxx + Vxx.transpose()).eval();
+    if (changes_) {
+      // The same formula on the augmented state's p rows, with Q_xp = 0.
+      const ControlMatrix& Kp = Kp_[t];
+      if (!Kp.allFinite()) return false;
+      Vp = Qp + Kp.transpose() * (Quu * k) + Kp.transpose() * Qu + Qup.transpose() * k;
+      Vpp = Qpp + Kp.transpose() * Quu * Kp + Kp.transpose() * Qup + Qup.transpose() * Kp;
+      Vpp = Scalar(0.5) * (Vpp + Vpp.transpose()).eval();
+      Vxp = K.transpose() * Quu * Kp + K.transpose() * Qup + Qux.transpose() * Kp;
+    }
+  }
+  return true;
+}
 
 }  // namespace hmpc

@@ -196,3 +196,14 @@ template <int A>
 FeedbackErrors feedback_errors(const BasicClosedLoopRun<A>& run);
 
 }  // namespace hmpc::humanoid
+
+namespace hmpc {
+
+// The Fine MPC's solver is compiled once, in src/humanoid/solvers (as the layers' are,
+// coarse_fast.hpp).
+extern template class Ilqr<humanoid::HumanoidProblem<humanoid::kFineHorizon, 0>,
+                           humanoid::kFineHorizon>;
+extern template class Ilqr<humanoid::HumanoidProblem<humanoid::kFineHorizon, 1>,
+                           humanoid::kFineHorizon>;
+
+}  // namespace hmpc

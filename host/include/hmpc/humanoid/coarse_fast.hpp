@@ -74,3 +74,19 @@ std::unique_ptr<BasicCoarseFast<A>> make_coarse_fast(
     const CoarseFastTiming& timing = kSimulationTiming);
 
 }  // namespace hmpc::humanoid
+
+namespace hmpc {
+
+// Each layer's solver is compiled once, in src/humanoid/solvers: the files that run an MPC
+// (closed loops, demonstrations, tests, benchmarks) would otherwise each spend GCC tens of
+// seconds on the same fixed-size backward pass.
+extern template class Ilqr<humanoid::HumanoidProblem<humanoid::kCoarseHorizon, 0>,
+                           humanoid::kCoarseHorizon>;
+extern template class Ilqr<humanoid::HumanoidProblem<humanoid::kCoarseHorizon, 1>,
+                           humanoid::kCoarseHorizon>;
+extern template class Ilqr<humanoid::FastSubsystem<humanoid::kFastHorizon, 0>,
+                           humanoid::kFastHorizon>;
+extern template class Ilqr<humanoid::FastSubsystem<humanoid::kFastHorizon, 1>,
+                           humanoid::kFastHorizon>;
+
+}  // namespace hmpc
