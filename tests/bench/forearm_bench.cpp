@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hmpc/models/forearm_mpc.hpp"
+#include "hmpc/models/forearm_solvers.hpp"
 
 namespace {
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "hmpc/models/forearm_mpc.hpp"
+#include "hmpc/models/forearm_solvers.hpp"
 #include "hmpc/models/forearm_tracking_limit.hpp"
 #include "simbody_forearm.hpp"
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "forearm_board.hpp"
+#include "hmpc/models/forearm_solvers.hpp"
 #include "hmpc/models/hydraulic_pendulum.hpp"
 #include "joint_board.hpp"
 

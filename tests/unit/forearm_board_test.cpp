@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hmpc/models/forearm.hpp"
+#include "hmpc/models/forearm_solvers.hpp"
 
 namespace {
 

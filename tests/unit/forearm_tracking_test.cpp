@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "hmpc/models/forearm_mpc.hpp"
+#include "hmpc/models/forearm_solvers.hpp"
 
 namespace {
 

@@ -13,6 +13,7 @@
 #include "board_main.hpp"
 #include "forearm_board.hpp"
 #include "forearm_options.hpp"
+#include "hmpc/models/forearm_solvers.hpp"
 
 namespace {
 
