@@ -13,8 +13,8 @@
 # Two cores: a build uses both, but the Release tests run one at a time and spend most of their
 # time in the vcan guest on one core, so every other preset builds while they test (their output
 # is kept and printed when they end). Those builds run at the lowest priority (nice 19): the
-# guest is the longest serial chain, and beside a build at equal priority (ninja's four jobs)
-# a guest run took 3.6 times as long (forearm_hil_faults_on_vcan: 406 s against 113 s alone),
+# guest is the longest serial chain, and a build at equal priority (ninja's four jobs) slows it
+# most (forearm_hil_faults_on_vcan: 406 s beside one, 169 s beside a niced one, 113 s alone),
 # while niced builds still take every cycle the tests leave. Only one preset tests at a time:
 # the vcan tests share vcan0.
 # Installs missing Debian packages first (toolchains/setup-debian.sh). Prints each step's time
