@@ -295,6 +295,41 @@ struct StandingStill {
   }
 };
 
+// The tilt of an estimate of an upright robot.
+double tilt(const est::InvariantEkf& filter) {
+  return std::acos(std::clamp((filter.estimate().orientation * Vector3::UnitZ()).z(), -1.0, 1.0));
+}
+
+// The soles standing level at rest tell roll and pitch, which the accelerometer's horizontal
+// power-up offset hides. Fused with gravity's direction (1.15 degrees per axis against the
+// soles' 0.5), the start's tilt error is about 0.5^2 / (0.5^2 + 1.15^2) = 16 % of the offset's
+// (the simulated legs' kinematics are exact), and the offset is found to within as much. Soles
+// tilted 6 degrees against gravity (a slope, a foot on a step) fail the gate: the attitude is
+// gravity's alone, as without the soles.
+TEST(InvariantEkf, LevelSolesAtRestRevealTheAccelerometersOffset) {
+  StandingStill robot;
+  const Vector3 offset = robot.imu.accelerometer_bias();
+  const double hidden = std::atan(offset.head<2>().norm() / 9.81);
+  ASSERT_GT(hidden, 0.2 * M_PI / 180);  // an offset to find
+  EXPECT_LT(tilt(robot.filter), 0.25 * hidden);
+  const Vector3 found = robot.filter.estimate().accelerometer_bias;
+  EXPECT_LT((found - offset).head<2>().norm(), 0.25 * offset.head<2>().norm());
+
+  est::InvariantEkfConfig blind;
+  blind.level_sole_noise = 1.0;  // rad: the soles tell nothing
+  const StandingStill unaided(blind);
+  EXPECT_GT(tilt(unaided.filter), 0.9 * hidden);
+
+  JointVector sloped = robot.angles();
+  sloped[kAnkle] += 0.1;
+  sloped[kJointsPerLeg + kAnkle] += 0.1;
+  est::ImuRest rest;
+  for (int k = 0; k < 100; ++k) rest.add(robot.read(), kDt);
+  est::InvariantEkf filter;
+  filter.initialize_at_rest(rest, sloped);
+  EXPECT_GT(tilt(filter), 0.9 * hidden);
+}
+
 bool finite(const est::BaseEstimate& e) {
   return e.position.allFinite() && e.orientation.coeffs().allFinite() && e.velocity.allFinite() &&
          e.angular_velocity.allFinite() && e.gyroscope_bias.allFinite() &&
@@ -446,12 +481,14 @@ TEST(InvariantEkf, GarbageInputNeverMakesTheEstimateNonFinite) {
 }
 
 // Walking and a jump land on heels and roll onto toes; the jump has a flight phase. Contact
-// from the forces or from the legs (and the IMU: flight_force). Height and velocity within the
-// targets. Tilt within the target plus what no filter can see at the start: the
-// accelerometer's horizontal power-up offset b reads at rest as a tilt of atan(|b_xy| / g)
-// (BMI088: 20 mg, 1.15 degrees per axis), which only motion reveals, slowly on a straight walk
-// (its yaw never turns the offset against gravity). Walking with contact from the legs is also
-// held to the target itself (0.93 degrees measured; the jump's, 0.9-1.4 over four seeds, is not).
+// from the forces or from the legs (and the IMU: flight_force). Height, velocity and tilt
+// within the targets. The accelerometer's horizontal power-up offset b, which alone reads at
+// rest as a tilt of atan(|b_xy| / g) (BMI088: 20 mg, 1.15 degrees per axis) and which a
+// straight walk reveals only slowly (its yaw never turns the offset against gravity), is found
+// at rest from the level soles (InvariantEkfConfig::level_sole_noise), to 16 % of it. Walking's
+// tilt, measured over seeds 21, 22, 23 and 25 (hidden tilts 1.0-2.6 degrees): 0.38-0.46
+// degrees RMS with contact from the forces, 0.73-0.86 from the legs; seed 26's offset (3.6
+// degrees, beyond twice the spread) leaves 1.06 from the legs.
 TEST(InvariantEkf, WalkingAndALowJumpMeetTheTargets) {
   for (const char* motion : {"II-walking", "V-low-jump"}) {
     const Recording r = record(motion, 6.0, 22);
@@ -463,10 +500,7 @@ TEST(InvariantEkf, WalkingAndALowJumpMeetTheTargets) {
       print((std::string(motion) + ", " + name_of(contact)).c_str(), e);
       EXPECT_LT(e.height_rms, 0.01);
       EXPECT_LT(e.horizontal_velocity_rms, 0.05);
-      EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180 + hidden);
-      if (contact == Contact::kFromLegs && motion == std::string("II-walking")) {
-        EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180);
-      }
+      EXPECT_LT(e.tilt_rms, 1.0 * M_PI / 180);
     }
   }
 }

@@ -33,12 +33,16 @@ Matrix3 left_jacobian(const Vector3& phi) {
 }  // namespace
 
 InvariantEkf::InvariantEkf(const humanoid::Parameters& parameters, const InvariantEkfConfig& config)
-    : model_(parameters), dynamics_(model_), config_(config),
-      ground_height_(
-          -humanoid::standing_sink(model_.total_mass() * model_.gravity.norm(), config.contact)),
+    : model_(parameters), dynamics_(model_), config_(config), mass_(model_.total_mass()),
       screen_(config.imu, config.stuck_samples) {
   const humanoid::ContactModel contact(model_, parameters, config.contact);
   for (int c = 0; c < humanoid::kFootPoints; ++c) sole_corner_[c] = contact.point(c).local;
+}
+
+double InvariantEkf::sink(double load, int feet) const {
+  // A linear spring under each sole corner (contact.hpp): n flat feet's corners, 4 n in all,
+  // sink by load / (4 n k) on average, however the load is shared among them.
+  return std::max(load, 0.0) / (feet * humanoid::kFootPoints * config_.contact.stiffness);
 }
 
 void InvariantEkf::leg_kinematics(const JointVector& angles, const JointVector& rates) {
@@ -90,6 +94,57 @@ Vector3 InvariantEkf::mean_of_corners(int foot, std::uint8_t mask, Vector3* velo
   return point / count;
 }
 
+template <int Rows>
+void InvariantEkf::update(const Eigen::Matrix<double, Rows, kErrorSize>& h,
+                          const Eigen::Matrix<double, Rows, 1>& z,
+                          const Eigen::Matrix<double, Rows, Rows>& n,
+                          const Eigen::Matrix<double, Rows, Rows>& unused) {
+  // K = P H^T S^-1, S = H P H^T + N; an unused measurement's rows are zero in H and z, and
+  // identity in S, so they take no part.
+  const Eigen::Matrix<double, kErrorSize, Rows> pht = covariance_ * h.transpose();
+  const Eigen::Matrix<double, Rows, Rows> s = h * pht + n + unused;
+  const Eigen::Matrix<double, kErrorSize, Rows> k = pht * s.inverse();
+  const Eigen::Matrix<double, kErrorSize, 1> delta = k * z;
+  // X+ = exp(delta) X: rotation Exp(phi); each vector x becomes Exp(phi) x + J_l(phi) xi.
+  const Vector3 dphi = delta.template segment<3>(kPhi);
+  const Matrix3 dr = exp_so3(dphi), jl = left_jacobian(dphi);
+  rotation_ = dr * rotation_;
+  velocity_ = dr * velocity_ + jl * delta.template segment<3>(kV);
+  position_ = dr * position_ + jl * delta.template segment<3>(kP);
+  for (int foot = 0; foot < kFeet; ++foot) {
+    stance_point_[foot] = dr * stance_point_[foot] + jl * delta.template segment<3>(kd(foot));
+  }
+  gyroscope_bias_ += delta.template segment<3>(kBg);
+  accelerometer_bias_ += delta.template segment<3>(kBa);
+  // Joseph form: (I - K H) P (I - K H)^T + K N K^T, symmetric and positive by construction.
+  const Covariance ikh = Covariance::Identity() - k * h;
+  covariance_ = ikh * covariance_ * ikh.transpose() + k * n * k.transpose();
+}
+
+void InvariantEkf::correct_with_level_soles() {
+  // A level sole's normal, R n_i (n_i from the legs, IMU coordinates), is e_z. With
+  // R_true = Exp(phi) R: R n_i = Exp(-phi) e_z = e_z + e_z x phi, so z = (R n_i)_xy =
+  // (-phi_y, phi_x) = H phi. The soles flat on the ground at rest pass the gate one by one
+  // (chi-square, 2 degrees of freedom, 99.9 %: 13.8) and are averaged into one measurement.
+  constexpr double kGate = 13.8;
+  Eigen::Matrix<double, 2, kErrorSize> h = Eigen::Matrix<double, 2, kErrorSize>::Zero();
+  h(0, kPhi + 1) = -1;
+  h(1, kPhi) = 1;
+  const double variance = config_.level_sole_noise * config_.level_sole_noise;
+  const Eigen::Matrix2d n = variance * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d s = h * covariance_ * h.transpose() + n;
+  Vector3 normal = Vector3::Zero();
+  for (int foot = 0; foot < kFeet; ++foot) {
+    if (support_[foot] != kFlat) continue;
+    const int body = Model::body_of(foot, humanoid::kAnkle);
+    const Eigen::Vector2d z = (rotation_ * kinematics_.rotation[body].col(2)).head<2>();
+    if (z.dot(s.ldlt().solve(z)) <= kGate) normal += kinematics_.rotation[body].col(2);
+  }
+  if (normal.isZero()) return;
+  const Eigen::Vector2d z = (rotation_ * normal.normalized()).head<2>();
+  update<2>(h, z, n, Eigen::Matrix2d::Zero());
+}
+
 void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles) {
   const double g = model_.gravity.norm();
   const Vector3 force = rest.mean_specific_force();
@@ -106,17 +161,11 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
     support_[foot] = support_corners(foot);
     foot_[foot] = mean_of_corners(foot, support_[foot], &foot_velocity_[foot]);
   }
-  // The lower sole on the ground.
-  const double lowest = std::min((rotation_ * foot_[0]).z(), (rotation_ * foot_[1]).z());
-  position_ = Vector3(0, 0, ground_height_ - lowest);
-  for (int foot = 0; foot < kFeet; ++foot) {
-    stance_point_[foot] = position_ + rotation_ * foot_[foot];
-    stance_[foot] = true;
-    slipping_[foot] = false;
-    fast_samples_[foot] = 0;
-  }
+  position_.setZero();
+  for (Vector3& point : stance_point_) point.setZero();
   covariance_.setZero();
-  const double a = config_.initial_attitude, vel = config_.initial_velocity;
+  const auto& imu = config_.imu;
+  const double a = imu.accelerometer.initial_bias / g, vel = config_.initial_velocity;
   const double pos = config_.initial_position;
   // Yaw is zero by convention: a small variance keeps the matrix positive definite.
   covariance_.block<3, 3>(kPhi, kPhi) = Vector3(a * a, a * a, 1e-4).asDiagonal();
@@ -126,17 +175,30 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& jo
     covariance_.block<3, 3>(kd(foot), kd(foot)) = pos * pos * Matrix3::Identity();
   }
   // The rest's mean leaves white noise of density / sqrt(seconds) in the gyroscope's bias and
-  // in the accelerometer's along gravity; across gravity the accelerometer's power-up spread
-  // stays (its effect on the attitude is in initial_attitude).
-  const auto& imu = config_.imu;
+  // in the accelerometer's along gravity. Across gravity the accelerometer's power-up offset
+  // and the attitude's error are one: the mean force R^T g e_z + b_a fixes only their sum, so
+  // a tilt phi goes with the offset zeta_a = -g R^T [e_z]x phi (the pair that leaves the
+  // velocity's error still at rest, A's [g]x phi - R zeta_a = 0).
   const double t = std::max(rest.seconds, imu.period);
   const double sg = imu.gyroscope.noise_density / std::sqrt(t);
   const double sa = imu.accelerometer.noise_density / std::sqrt(t);
-  const double sh = imu.accelerometer.initial_bias;
   covariance_.block<3, 3>(kBg, kBg) = sg * sg * Matrix3::Identity();
-  const Matrix3 vertical = up * up.transpose();
+  const Matrix3 tilt_to_offset = -g * rotation_.transpose() * skew(Vector3::UnitZ());
+  const Matrix3 attitude = covariance_.block<3, 3>(kPhi, kPhi);
+  covariance_.block<3, 3>(kBa, kPhi) = tilt_to_offset * attitude;
+  covariance_.block<3, 3>(kPhi, kBa) = attitude * tilt_to_offset.transpose();
   covariance_.block<3, 3>(kBa, kBa) =
-      sa * sa * vertical + sh * sh * (Matrix3::Identity() - vertical);
+      tilt_to_offset * attitude * tilt_to_offset.transpose() + sa * sa * up * up.transpose();
+  correct_with_level_soles();
+  // The lower sole on the ground, in the attitude the soles corrected.
+  const double lowest = std::min((rotation_ * foot_[0]).z(), (rotation_ * foot_[1]).z());
+  position_ = Vector3(0, 0, -sink(mass_ * force.norm(), kFeet) - lowest);
+  for (int foot = 0; foot < kFeet; ++foot) {
+    stance_point_[foot] = position_ + rotation_ * foot_[foot];
+    stance_[foot] = true;
+    slipping_[foot] = false;
+    fast_samples_[foot] = 0;
+  }
   screen_.start(rest.mean_angular_velocity(), force);
   degraded_samples_ = 0;
   lost_ = false;
@@ -318,22 +380,19 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
   }
 
   // Per stance foot, with H = -dz/dxi (so that X+ = exp(K z) X removes the error):
-  // kinematics z = R FK_i + p - d_i (zero for a fixed point), H = [0 0 -I ... I at d_i];
-  // ground (a flat foot only) z = e_z^T d_i - ground height, H = [e_z^T [d_i]x 0 0 ... -e_z^T
-  // at d_i] (d_i's error is phi x d_i + xi_d).
-  constexpr int kRows = 4 * kFeet;
+  // kinematics z = R FK_i + p - d_i (zero for a fixed point), H = [0 0 -I ... I at d_i].
+  constexpr int kRows = 3 * kFeet + 1, kGround = 3 * kFeet;
   Eigen::Matrix<double, kRows, kErrorSize> h = Eigen::Matrix<double, kRows, kErrorSize>::Zero();
   Eigen::Matrix<double, kRows, 1> z = Eigen::Matrix<double, kRows, 1>::Zero();
   Eigen::Matrix<double, kRows, kRows> n = Eigen::Matrix<double, kRows, kRows>::Zero();
   Eigen::Matrix<double, kRows, kRows> unused = Eigen::Matrix<double, kRows, kRows>::Zero();
   const double nk = config_.kinematics_noise * config_.kinematics_noise;
-  const double ng = config_.ground_noise * config_.ground_noise;
   bool any = false;
   for (int foot = 0; foot < kFeet; ++foot) {
-    const int row = 4 * foot;
+    const int row = 3 * foot;
     gated_[foot] = false;
     if (!used[foot]) {
-      unused.block<4, 4>(row, row).setIdentity();
+      unused.block<3, 3>(row, row).setIdentity();
       continue;
     }
     const Vector3& d = stance_point_[foot];
@@ -346,7 +405,7 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
     gated_[foot] = innovation.dot(spread.ldlt().solve(innovation)) > config_.innovation_gate;
     if (gated_[foot]) {
       used[foot] = false;
-      unused.block<4, 4>(row, row).setIdentity();
+      unused.block<3, 3>(row, row).setIdentity();
       continue;
     }
     any = true;
@@ -354,37 +413,30 @@ void InvariantEkf::correct_with_legs(const JointVector& joint_angles,
     h.block<3, 3>(row, kP) = -Matrix3::Identity();
     h.block<3, 3>(row, kd(foot)) = Matrix3::Identity();
     n.block<3, 3>(row, row) = nk * Matrix3::Identity();
-    if (support_[foot] != kFlat) {
-      unused(row + 3, row + 3) = 1;
-      continue;
-    }
-    z[row + 3] = d.z() - ground_height_;
-    h.block<1, 3>(row + 3, kPhi) = Vector3::UnitZ().transpose() * skew(d);
-    h.block<1, 3>(row + 3, kd(foot)) = -Vector3::UnitZ().transpose();
-    n(row + 3, row + 3) = ng;
   }
-  if (any) {
-    // K = P H^T S^-1, S = H P H^T + N; an unused foot's rows are zero in H and z, and
-    // identity in S, so they take no part.
-    const Eigen::Matrix<double, kErrorSize, kRows> pht = covariance_ * h.transpose();
-    const Eigen::Matrix<double, kRows, kRows> s = h * pht + n + unused;
-    const Eigen::Matrix<double, kErrorSize, kRows> k = pht * s.inverse();
-    const Eigen::Matrix<double, kErrorSize, 1> delta = k * z;
-    // X+ = exp(delta) X: rotation Exp(phi); each vector x becomes Exp(phi) x + J_l(phi) xi.
-    const Vector3 dphi = delta.segment<3>(kPhi);
-    const Matrix3 dr = exp_so3(dphi), jl = left_jacobian(dphi);
-    rotation_ = dr * rotation_;
-    velocity_ = dr * velocity_ + jl * delta.segment<3>(kV);
-    position_ = dr * position_ + jl * delta.segment<3>(kP);
+  // Ground, when every used foot stands flat: the mean height of their stance points is minus
+  // their sink, z = mean_i e_z^T d_i + sink, H = mean_i [e_z^T [d_i]x 0 0 ... -e_z^T at d_i]
+  // (d_i's error is phi x d_i + xi_d).
+  int flat = 0, feet = 0;
+  for (int foot = 0; foot < kFeet; ++foot) {
+    feet += used[foot] ? 1 : 0;
+    flat += used[foot] && support_[foot] == kFlat ? 1 : 0;
+  }
+  if (flat > 0 && flat == feet) {
+    const double load = mass_ * (rotation_ * last_specific_force_).z();
+    z[kGround] = sink(load, flat);
     for (int foot = 0; foot < kFeet; ++foot) {
-      stance_point_[foot] = dr * stance_point_[foot] + jl * delta.segment<3>(kd(foot));
+      if (!used[foot]) continue;
+      const Vector3& d = stance_point_[foot];
+      z[kGround] += d.z() / flat;
+      h.block<1, 3>(kGround, kPhi) += Vector3::UnitZ().transpose() * skew(d) / flat;
+      h.block<1, 3>(kGround, kd(foot)) = -Vector3::UnitZ().transpose() / flat;
     }
-    gyroscope_bias_ += delta.segment<3>(kBg);
-    accelerometer_bias_ += delta.segment<3>(kBa);
-    // Joseph form: (I - K H) P (I - K H)^T + K N K^T, symmetric and positive by construction.
-    const Covariance ikh = Covariance::Identity() - k * h;
-    covariance_ = ikh * covariance_ * ikh.transpose() + k * n * k.transpose();
+    n(kGround, kGround) = config_.ground_noise * config_.ground_noise;
+  } else {
+    unused(kGround, kGround) = 1;
   }
+  if (any) update<kRows>(h, z, n, unused);
   for (int foot = 0; foot < kFeet; ++foot) {
     if (!used[foot]) anchor_swing_foot(foot);
   }

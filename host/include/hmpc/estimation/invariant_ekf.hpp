@@ -26,6 +26,7 @@
 #include <array>
 #include <cstdint>
 
+#include "hmpc/constants.hpp"
 #include "hmpc/estimation/base_estimate.hpp"
 #include "hmpc/estimation/imu_screen.hpp"
 #include "hmpc/humanoid/contact.hpp"
@@ -51,15 +52,21 @@ struct InvariantEkfConfig {
   // Leg kinematics' error [m] per axis: link lengths, joint play, the contact wandering
   // within its support. Choice: 5 mm.
   double kinematics_noise = 0.005;
-  // The ground is flat at z = 0, as the MPC's contact model has it: the centre of a flat
-  // stance sole sits at minus the standing sink of its compliance (humanoid::standing_sink),
-  // within ground_noise [m] (the sink grows in single support). It makes the height, otherwise
-  // unobservable like the horizontal position, an estimate instead of a drift. A foot on an
-  // edge or a corner gives no such measurement: how deep an edge sinks depends on how the load
-  // is shared (a heel edge 12-20 mm deep measured on the slow squat, against 10 mm flat), and
-  // pulling it to the flat sink tilted the estimate.
+  // The ground is flat at z = 0, as the MPC's contact model has it: flat stance soles sink
+  // into its compliance by the load they carry, the robot's mass times the IMU's vertical
+  // specific force, spread over their corners (a linear spring each). Only the feet's mean
+  // height is measured, because how two feet share the load is unknown (a flat stance in
+  // single support sinks 2 cm, twice the standing sink; taken as 1 cm for every flat foot, it
+  // tilted the walk's estimate by 1 degree). It makes the height, otherwise unobservable
+  // like the horizontal position, an estimate instead of a drift. Not while any stance foot is
+  // on an edge or a corner: how deep an edge sinks depends on the load's share along the sole
+  // (a heel edge 12-20 mm deep measured on the slow squat, against 10 mm flat). ground_noise
+  // [m]: the load misses the legs' own accelerations and the contact's damping (c v, half the
+  // spring's force at a 0.5 m/s touchdown); choice 2 cm, measured on the recorded runs (tilt
+  // RMS, walking and the low jump, contact from the legs): 0.5 cm 0.57 and 1.58 degrees, 1 cm
+  // 0.46 and 0.78, 2 cm 0.37 and 0.35.
   humanoid::ContactParameters contact{};
-  double ground_noise = 0.01;
+  double ground_noise = 0.02;
   // Two stance feet whose support points move apart faster than slip_speed [m/s] for
   // slip_samples in a row: the faster of them is slipping. Choices: 0.3 m/s and 20 samples
   // (20 ms): a sole rolling from heel to toe and the boards' filtered joint rates (a few ms
@@ -105,10 +112,17 @@ struct InvariantEkfConfig {
   // 16.3 is the chi-square distribution's 99.9 % point for 3 degrees of freedom.
   double innovation_gate = 16.3;
   // Initial standard deviations beyond what the rest gives: yaw and horizontal position are
-  // set by convention (zero), not measured.
-  double initial_attitude = 0.02;  // rad, roll and pitch from gravity with bias errors
+  // set by convention (zero), not measured. (Roll and pitch from gravity carry the
+  // accelerometer's horizontal power-up spread, imu.accelerometer.initial_bias / g.)
   double initial_velocity = 0.01;  // m/s, at rest
   double initial_position = 0.01;  // m
+  // At rest the soles stand flat on level ground, so the legs tell roll and pitch, which the
+  // accelerometer alone cannot tell from its horizontal power-up offset (BMI088: 20 mg, 1.15
+  // degrees per axis, otherwise revealed only by motion, slowly on a straight walk). Their
+  // error per axis [rad]: choice 0.5 degrees, a lab floor's slope (0.1-0.3 degrees) and the
+  // leg joints' zero offsets summed along hip, knee and ankle (~0.2 degrees each). A sole
+  // tilted beyond the innovation gate (on a step, a foot on its toes) is not used.
+  double level_sole_noise = 0.5 * kPi<double> / 180;
 
   // Bad input. An IMU reading that is not finite, saturated or beyond the sensor's range, or
   // stuck (the same six values
@@ -142,10 +156,11 @@ class InvariantEkf {
                         const InvariantEkfConfig& config = {});
 
   // Starts the filter on a robot standing still on flat ground (z = 0): roll and pitch from the
-  // mean specific force, the gyroscope bias from the mean rate, the accelerometer bias along
-  // gravity from the mean force's magnitude; yaw and horizontal position zero (unobservable);
-  // height from the legs. Feet on the ground are the stance points.
-  // The rest must hold at least one sample.
+  // mean specific force, corrected by the soles standing level (level_sole_noise), which also
+  // gives the accelerometer's horizontal bias; the gyroscope bias from the mean rate, the
+  // accelerometer bias along gravity from the mean force's magnitude; yaw and horizontal
+  // position zero (unobservable); height from the legs. Feet on the ground are the stance
+  // points. The rest must hold at least one sample.
   void initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles);
 
   // One IMU sample, dt after the last (bad readings and intervals: InvariantEkfConfig).
@@ -165,6 +180,8 @@ class InvariantEkf {
   const RejectedInputs& rejected() const { return rejected_; }
 
  private:
+  // How deep `feet` flat soles sink under a vertical ground force `load` [N].
+  double sink(double load, int feet) const;
   // Foot i's sole corners in IMU coordinates, and their velocities there from the joint rates
   // (the leg moving, the IMU frame held).
   void leg_kinematics(const JointVector& angles, const JointVector& rates);
@@ -175,6 +192,14 @@ class InvariantEkf {
   void anchor_swing_foot(int foot);
   // One step of the IMU's process model with bias-corrected rate w and force a.
   void integrate(const Vector3& w, const Vector3& a, double dt);
+  // The Kalman update with z = H xi + noise (covariance n; X_true = exp(xi) X): rows of an
+  // unused measurement are zero in h and z and identity in n.
+  template <int Rows>
+  void update(const Eigen::Matrix<double, Rows, kErrorSize>& h,
+              const Eigen::Matrix<double, Rows, 1>& z, const Eigen::Matrix<double, Rows, Rows>& n,
+              const Eigen::Matrix<double, Rows, Rows>& unused);
+  // The soles standing level at rest, as a measurement of roll and pitch.
+  void correct_with_level_soles();
   // The correction with finite joint readings; null stance flags: inferred from the legs.
   void correct_checked(const JointVector& joint_angles, const JointVector& joint_rates,
                        const std::array<bool, kFeet>* stance);
@@ -195,7 +220,7 @@ class InvariantEkf {
   Model model_;
   humanoid::Dynamics dynamics_;
   InvariantEkfConfig config_;
-  double ground_height_;  // of a stance point [m]
+  double mass_;  // the robot's [kg]
   humanoid::Kinematics kinematics_;
   std::array<Vector3, humanoid::kFootPoints> sole_corner_{};                // foot coordinates
   std::array<std::array<Vector3, humanoid::kFootPoints>, kFeet> corner_{};  // IMU coordinates
