@@ -40,9 +40,8 @@ InvariantEkf::InvariantEkf(const humanoid::Parameters& parameters, const Invaria
 }
 
 double InvariantEkf::sink(double load, int feet) const {
-  // A linear spring under each sole corner (contact.hpp): n flat feet's corners, 4 n in all,
-  // sink by load / (4 n k) on average, however the load is shared among them.
-  return std::max(load, 0.0) / (feet * humanoid::kFootPoints * config_.contact.stiffness);
+  // A pull (a negative load from a specific force below zero) lifts no sole out of the ground.
+  return humanoid::sole_sink(std::max(load, 0.0), feet * humanoid::kFootPoints, config_.contact);
 }
 
 void InvariantEkf::leg_kinematics(const JointVector& angles, const JointVector& rates) {

@@ -95,11 +95,18 @@ struct BasicContactState {
   std::array<Matrix3, kContactPoints> force_velocity;
 };
 
+// How far `points` sole points in contact sink into the ground on average under a vertical
+// `load` [N]: each is a linear spring, so the mean depth is load / (points k) however the load
+// is shared among them.
+inline double sole_sink(double load, int points, const ContactParameters& contact) {
+  return load / (points * contact.stiffness);
+}
+
 // How far the soles sink into the ground under a standing robot of `weight` [N], its load
 // shared by the eight sole points: the flat ground's height under a standing foot's sole
 // points is minus this.
 inline double standing_sink(double weight, const ContactParameters& contact) {
-  return weight / (kSolePoints * contact.stiffness);
+  return sole_sink(weight, kSolePoints, contact);
 }
 
 template <int ArmJoints>

@@ -121,7 +121,8 @@ struct InvariantEkfConfig {
   // degrees per axis, otherwise revealed only by motion, slowly on a straight walk). Their
   // error per axis [rad]: choice 0.5 degrees, a lab floor's slope (0.1-0.3 degrees) and the
   // leg joints' zero offsets summed along hip, knee and ankle (~0.2 degrees each). A sole
-  // tilted beyond the innovation gate (on a step, a foot on its toes) is not used.
+  // tilted beyond a chi-square gate (2 degrees of freedom, 99.9 %: on a slope, on a step) is
+  // not used.
   double level_sole_noise = 0.5 * kPi<double> / 180;
 
   // Bad input. An IMU reading that is not finite, saturated or beyond the sensor's range, or
