@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include "hmpc/humanoid/spatial.hpp"
+#include "joint_transform.hpp"
 
 namespace hmpc::humanoid {
 namespace {
@@ -46,6 +47,9 @@ BasicDynamics<A>::BasicDynamics(const Model& model) : model_(model) {
     const Body& b = model_.bodies[i];
     inertia_[i] = spatial_inertia(b.mass, b.com, b.inertia);
     subspace_[i] << b.axis, Vector3::Zero();
+    const joint_transform::Pattern pattern = joint_transform::pattern_of(b.axis, b.joint_origin);
+    transform_pattern_[i] = joint_transform::index_of(pattern);
+    coordinate_axis_[i] = pattern.axis;
   }
   // mass_matrix() writes the entries of each joint and its ancestors; the rest, joints on
   // different legs, never couple.
@@ -75,32 +79,47 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix(const Configuration& q) 
 
 template <int A>
 const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
-  // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X.
-  for (int i = 0; i < kBodies; ++i) composite_[i] = inertia_[i];
-  for (int i = kBodies - 1; i > 0; --i) {
-    composite_[model_.bodies[i].parent] +=
-        transform_[i].transpose() * composite_[i] * transform_[i];
+  // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X. Body i's children
+  // have larger indices, so I^c_i is complete when i is reached.
+  for (int i = 0; i < kBodies; ++i) {
+    composite_[i] = inertia_[i];
+    subtree_count_[i] = 0;
   }
-  // Base block: S_0 = identity, so M_00 = I^c_0.
-  mass_matrix_.template topLeftCorner<6, 6>() = composite_[0];
   for (int i = kBodies - 1; i > 0; --i) {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
-    // carried to each ancestor j it gives M_ji = S_j^T F.
-    Vector6 F = composite_[i] * subspace_[i];
-    mass_matrix_(dof_of(i), dof_of(i)) = subspace_[i].dot(F) + model_.armature[i - 1];
-    int j = i;
-    while (model_.bodies[j].parent >= 0) {
-      F = transform_[j].transpose() * F;
-      j = model_.bodies[j].parent;
-      if (j == 0) {
-        mass_matrix_.template block<6, 1>(0, dof_of(i)) = F;
-        mass_matrix_.template block<1, 6>(dof_of(i), 0) = F.transpose();
-      } else {
-        const double m = subspace_[j].dot(F);
-        mass_matrix_(dof_of(j), dof_of(i)) = m;
-        mass_matrix_(dof_of(i), dof_of(j)) = m;
-      }
+    // carried to each ancestor j it gives M_ji = S_j^T F (the base: M_0i = F).
+    // About a coordinate axis a, S = +-e_a: I^c S and S^T F are +-(column a) and +-F_a, the
+    // same numbers as the products, whose other terms are exact zeros.
+    const int a = coordinate_axis_[i];
+    int& count = subtree_count_[i];
+    if (a >= 0) {
+      subtree_force_[i].col(count) = composite_[i].col(a) * subspace_[i][a];
+    } else {
+      subtree_force_[i].col(count) = composite_[i] * subspace_[i];
     }
+    subtree_dof_[i][count++] = dof_of(i);
+    for (int c = 0; c < count; ++c) {
+      const int k = subtree_dof_[i][c];
+      const double m = a >= 0 ? subspace_[i][a] * subtree_force_[i](a, c)
+                              : subspace_[i].dot(subtree_force_[i].col(c));
+      mass_matrix_(dof_of(i), k) = m;
+      mass_matrix_(k, dof_of(i)) = m;
+    }
+    mass_matrix_(dof_of(i), dof_of(i)) += model_.armature[i - 1];
+    const int parent = model_.bodies[i].parent;
+    int& parent_count = subtree_count_[parent];
+    joint_transform::kCarryToParent<kBodies>[transform_pattern_[i]](
+        composite_[parent], transform_[i], composite_[i], subtree_force_[i], count,
+        subtree_force_[parent], parent_count);
+    for (int c = 0; c < count; ++c) subtree_dof_[parent][parent_count + c] = subtree_dof_[i][c];
+    parent_count += count;
+  }
+  // Base block: S_0 = identity, so M_00 = I^c_0 and M_0k = F.
+  mass_matrix_.template topLeftCorner<6, 6>() = composite_[0];
+  for (int c = 0; c < subtree_count_[0]; ++c) {
+    const int k = subtree_dof_[0][c];
+    mass_matrix_.template block<6, 1>(0, k) = subtree_force_[0].col(c);
+    mass_matrix_.template block<1, 6>(k, 0) = subtree_force_[0].col(c).transpose();
   }
   return mass_matrix_;
 }

@@ -77,11 +77,20 @@ class BasicDynamics {
   Model model_;
   std::array<Matrix6, kBodies> inertia_;   // spatial inertia about the body origin
   std::array<Vector6, kBodies> subspace_;  // motion subspace S of revolute joints
+  // Each joint transform's zero pattern (joint_transform.hpp), for the CRBA's products, and the
+  // coordinate axis a joint turns about (-1: none), whose S picks one entry.
+  std::array<int, kBodies> transform_pattern_{};
+  std::array<int, kBodies> coordinate_axis_{};
   // Workspace.
   Configuration configuration_;             // of set_configuration()
   std::array<Matrix6, kBodies> transform_;  // X from parent (or world) to body coordinates
   std::array<Vector6, kBodies> velocity_, acceleration_, force_;
   std::array<Matrix6, kBodies> composite_;
+  // The CRBA's forces I^c_k S_k of every joint k in a body's subtree, carried to that body, and
+  // their joints' velocity indices.
+  std::array<Eigen::Matrix<double, 6, kBodies>, kBodies> subtree_force_;
+  std::array<std::array<int, kBodies>, kBodies> subtree_dof_;
+  std::array<int, kBodies> subtree_count_;
   MassMatrix mass_matrix_;
   // Factorised once at construction, so that a copy never reads an uninitialised state.
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
