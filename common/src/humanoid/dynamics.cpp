@@ -51,6 +51,15 @@ BasicDynamics<A>::BasicDynamics(const Model& model) : model_(model) {
     transform_pattern_[i] = joint_transform::index_of(pattern);
     coordinate_axis_[i] = pattern.axis;
   }
+  // Children have larger indices than their parents (Body), so leaves to root is i descending.
+  for (int i = kBodies - 1; i > 0; --i) {
+    subtree_dof_[i][subtree_size_[i]++] = dof_of(i);
+    const int parent = model_.bodies[i].parent;
+    offset_in_parent_[i] = subtree_size_[parent];
+    for (int c = 0; c < subtree_size_[i]; ++c) {
+      subtree_dof_[parent][subtree_size_[parent]++] = subtree_dof_[i][c];
+    }
+  }
   // mass_matrix() writes the entries of each joint and its ancestors; the rest, joints on
   // different legs, never couple.
   mass_matrix_.setZero();
@@ -79,25 +88,24 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix(const Configuration& q) 
 
 template <int A>
 const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
-  // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X. Body i's children
-  // have larger indices, so I^c_i is complete when i is reached.
-  for (int i = 0; i < kBodies; ++i) {
-    composite_[i] = inertia_[i];
-    subtree_count_[i] = 0;
-  }
+  // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X, starting from the
+  // parent's own inertia. Body i's children come first, so I^c_i is complete when i is reached;
+  // a body without children is its own composite.
+  std::array<bool, kBodies> has_children{};
+  const auto composite = [&](int i) -> const Matrix6& {
+    return has_children[i] ? composite_[i] : inertia_[i];
+  };
   for (int i = kBodies - 1; i > 0; --i) {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
     // carried to each ancestor j it gives M_ji = S_j^T F (the base: M_0i = F).
     // About a coordinate axis a, S = +-e_a: I^c S and S^T F are +-(column a) and +-F_a, the
     // same numbers as the products, whose other terms are exact zeros.
-    const int a = coordinate_axis_[i];
-    int& count = subtree_count_[i];
+    const int a = coordinate_axis_[i], count = subtree_size_[i];
     if (a >= 0) {
-      subtree_force_[i].col(count) = composite_[i].col(a) * subspace_[i][a];
+      subtree_force_[i].col(count - 1) = composite(i).col(a) * subspace_[i][a];
     } else {
-      subtree_force_[i].col(count) = composite_[i] * subspace_[i];
+      subtree_force_[i].col(count - 1) = composite(i) * subspace_[i];
     }
-    subtree_dof_[i][count++] = dof_of(i);
     for (int c = 0; c < count; ++c) {
       const int k = subtree_dof_[i][c];
       const double m = a >= 0 ? subspace_[i][a] * subtree_force_[i](a, c)
@@ -107,16 +115,14 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
     }
     mass_matrix_(dof_of(i), dof_of(i)) += model_.armature[i - 1];
     const int parent = model_.bodies[i].parent;
-    int& parent_count = subtree_count_[parent];
     joint_transform::kCarryToParent<kBodies>[transform_pattern_[i]](
-        composite_[parent], transform_[i], composite_[i], subtree_force_[i], count,
-        subtree_force_[parent], parent_count);
-    for (int c = 0; c < count; ++c) subtree_dof_[parent][parent_count + c] = subtree_dof_[i][c];
-    parent_count += count;
+        composite_[parent], composite(parent), transform_[i], composite(i), subtree_force_[i],
+        count, subtree_force_[parent], offset_in_parent_[i]);
+    has_children[parent] = true;
   }
   // Base block: S_0 = identity, so M_00 = I^c_0 and M_0k = F.
-  mass_matrix_.template topLeftCorner<6, 6>() = composite_[0];
-  for (int c = 0; c < subtree_count_[0]; ++c) {
+  mass_matrix_.template topLeftCorner<6, 6>() = composite(0);
+  for (int c = 0; c < subtree_size_[0]; ++c) {
     const int k = subtree_dof_[0][c];
     mass_matrix_.template block<6, 1>(0, k) = subtree_force_[0].col(c);
     mass_matrix_.template block<1, 6>(k, 0) = subtree_force_[0].col(c).transpose();

@@ -125,8 +125,9 @@ EIGEN_ALWAYS_INLINE Vector6 times_column(const Matrix6& A, const Matrix6& X,
 }
 
 // Carrying a body's composite inertia C and the forces that reach it (columns of F) across its
-// joint to its parent: parent += X^T C X (Featherstone Table 6.2), F = X^T F. One call per body,
-// so that a pattern's products are dispatched once.
+// joint to its parent: parent = start + X^T C X (Featherstone Table 6.2, start being the
+// parent's own inertia or its composite so far), F = X^T F. One call per body, so that a
+// pattern's products are dispatched once.
 template <int Columns>
 using Forces = Eigen::Matrix<double, 6, Columns>;
 
@@ -136,7 +137,8 @@ struct Structured {
   // parent_count columns.
   // Flattened: Eigen's small assignments inside are otherwise left as calls in a large unit.
   template <int Columns>
-  [[gnu::flatten]] static void carry_to_parent(Matrix6& parent, const Matrix6& X, const Matrix6& C,
+  [[gnu::flatten]] static void carry_to_parent(Matrix6& parent, const Matrix6& start,
+                                               const Matrix6& X, const Matrix6& C,
                                                const Forces<Columns>& forces, int count,
                                                Forces<Columns>& parent_forces, int parent_count) {
     constexpr auto rows = std::make_integer_sequence<int, 6>{};
@@ -146,21 +148,22 @@ struct Structured {
     }
     Matrix6 XtC;
     for (int j = 0; j < 6; ++j) transposed_times<Index>(Xt, C.col(j), XtC.col(j));
-    add_columns(parent, XtC, X, rows);
+    add_columns(parent, start, XtC, X, rows);
   }
 
  private:
   template <int... J>
-  static EIGEN_ALWAYS_INLINE void add_columns(Matrix6& parent, const Matrix6& A, const Matrix6& X,
+  static EIGEN_ALWAYS_INLINE void add_columns(Matrix6& parent, const Matrix6& start,
+                                              const Matrix6& A, const Matrix6& X,
                                               std::integer_sequence<int, J...> rows) {
-    ((parent.col(J) += times_column<Index, J>(A, X, rows)), ...);
+    ((parent.col(J) = start.col(J) + times_column<Index, J>(A, X, rows)), ...);
   }
 };
 
 // The instances for every pattern, indexed by index_of().
 template <int Columns>
-using CarryToParent = void (*)(Matrix6& parent, const Matrix6& X, const Matrix6& C,
-                               const Forces<Columns>& forces, int count,
+using CarryToParent = void (*)(Matrix6& parent, const Matrix6& start, const Matrix6& X,
+                               const Matrix6& C, const Forces<Columns>& forces, int count,
                                Forces<Columns>& parent_forces, int parent_count);
 template <int Columns, int... Index>
 constexpr std::array<CarryToParent<Columns>, kPatterns> carry_table(

@@ -81,16 +81,18 @@ class BasicDynamics {
   // coordinate axis a joint turns about (-1: none), whose S picks one entry.
   std::array<int, kBodies> transform_pattern_{};
   std::array<int, kBodies> coordinate_axis_{};
+  // The joints in each body's subtree in the CRBA's order (its children's, as carried up, then
+  // its own), how many, and where a body's list starts in its parent's.
+  std::array<std::array<int, kBodies>, kBodies> subtree_dof_{};
+  std::array<int, kBodies> subtree_size_{};
+  std::array<int, kBodies> offset_in_parent_{};
   // Workspace.
   Configuration configuration_;             // of set_configuration()
   std::array<Matrix6, kBodies> transform_;  // X from parent (or world) to body coordinates
   std::array<Vector6, kBodies> velocity_, acceleration_, force_;
   std::array<Matrix6, kBodies> composite_;
-  // The CRBA's forces I^c_k S_k of every joint k in a body's subtree, carried to that body, and
-  // their joints' velocity indices.
+  // The CRBA's forces I^c_k S_k of the joints k in a body's subtree, carried to that body.
   std::array<Eigen::Matrix<double, 6, kBodies>, kBodies> subtree_force_;
-  std::array<std::array<int, kBodies>, kBodies> subtree_dof_;
-  std::array<int, kBodies> subtree_count_;
   MassMatrix mass_matrix_;
   // Factorised once at construction, so that a copy never reads an uninitialised state.
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
