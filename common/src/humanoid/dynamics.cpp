@@ -99,7 +99,8 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
     // carried to each ancestor j it gives M_ji = S_j^T F (the base: M_0i = F).
     // About a coordinate axis a, S = +-e_a: I^c S and S^T F are +-(column a) and +-F_a, the
-    // same numbers as the products, whose other terms are exact zeros.
+    // same numbers as the products, whose other terms are exact zeros. (The forces are stored
+    // by rows; a column is copied out so that its dot product adds in the packets' order.)
     const int a = coordinate_axis_[i], count = subtree_size_[i];
     if (a >= 0) {
       subtree_force_[i].col(count - 1) = composite(i).col(a) * subspace_[i][a];
@@ -109,7 +110,7 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
     for (int c = 0; c < count; ++c) {
       const int k = subtree_dof_[i][c];
       const double m = a >= 0 ? subspace_[i][a] * subtree_force_[i](a, c)
-                              : subspace_[i].dot(subtree_force_[i].col(c));
+                              : subspace_[i].dot(Vector6(subtree_force_[i].col(c)));
       mass_matrix_(dof_of(i), k) = m;
       mass_matrix_(k, dof_of(i)) = m;
     }

@@ -76,51 +76,49 @@ constexpr int first_nonzero_row(Pattern p, int col) {
   return row;
 }
 
+// Two doubles in one register (SSE2 or NEON): Eigen's own packet operations, so that the lanes
+// round exactly as the dense expressions' packets do.
+using Packet = Eigen::internal::Packet2d;
+
 // a + b where either term may be absent (an exact zero in the dense sum).
 template <bool HasA, bool HasB>
-EIGEN_ALWAYS_INLINE Eigen::Vector2d sum_of(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  if constexpr (HasA && HasB) return a + b;
+EIGEN_ALWAYS_INLINE Packet sum_of(const Packet& a, const Packet& b) {
+  if constexpr (HasA && HasB) return Eigen::internal::padd(a, b);
   if constexpr (HasA && !HasB) return a;
   if constexpr (!HasA) return b;
 }
 
-// Rows P and P + 1 of X^T y, each row's sum over k of X(k, I) y_k in the two-lane order above;
-// the rows are two lanes of one packet. A term is left out where it is zero in both rows, and
-// kept where it is zero in one: adding an exact zero does not change a sum either.
-template <int Index, int P, class Column>
-EIGEN_ALWAYS_INLINE Eigen::Vector2d transposed_rows_times(const Matrix6& Xt, const Column& y) {
+// Sum over k of X(k, I) y_k in the two-lane order above, for two vectors y at once (the two lanes
+// of y[k]): both lanes share X's column I, so the terms left out are the same in both.
+template <int Index, int I>
+EIGEN_ALWAYS_INLINE Packet transposed_row_times(const Matrix6& X, const Packet (&y)[6]) {
   constexpr Pattern p = pattern_at(Index);
-  constexpr bool n0 = nonzero(p, 0, P) || nonzero(p, 0, P + 1);
-  constexpr bool n1 = nonzero(p, 1, P) || nonzero(p, 1, P + 1);
-  constexpr bool n2 = nonzero(p, 2, P) || nonzero(p, 2, P + 1);
-  constexpr bool n3 = nonzero(p, 3, P) || nonzero(p, 3, P + 1);
-  constexpr bool n4 = nonzero(p, 4, P) || nonzero(p, 4, P + 1);
-  constexpr bool n5 = nonzero(p, 5, P) || nonzero(p, 5, P + 1);
-  Eigen::Vector2d t[6];
-  for (int k = 0; k < 6; ++k) t[k] = Xt.col(k).template segment<2>(P) * y[k];
+  constexpr bool n0 = nonzero(p, 0, I), n1 = nonzero(p, 1, I), n2 = nonzero(p, 2, I);
+  constexpr bool n3 = nonzero(p, 3, I), n4 = nonzero(p, 4, I), n5 = nonzero(p, 5, I);
+  const auto term = [&](int k) {
+    return Eigen::internal::pmul(Eigen::internal::pset1<Packet>(X(k, I)), y[k]);
+  };
   constexpr bool n24 = n2 || n4, n35 = n3 || n5;
-  const Eigen::Vector2d even = sum_of<n0, n24>(t[0], sum_of<n2, n4>(t[2], t[4]));
-  const Eigen::Vector2d odd = sum_of<n1, n35>(t[1], sum_of<n3, n5>(t[3], t[5]));
+  const Packet even = sum_of<n0, n24>(term(0), sum_of<n2, n4>(term(2), term(4)));
+  const Packet odd = sum_of<n1, n35>(term(1), sum_of<n3, n5>(term(3), term(5)));
   constexpr bool has_even = n0 || n24, has_odd = n1 || n35;
   return sum_of<has_even, has_odd>(even, odd);
 }
 
-// X^T y, from Xt = X^T.
-template <int Index, class Column, class Out>
-EIGEN_ALWAYS_INLINE void transposed_times(const Matrix6& Xt, const Column& y, Out&& out) {
-  out.template segment<2>(0) = transposed_rows_times<Index, 0>(Xt, y);
-  out.template segment<2>(2) = transposed_rows_times<Index, 2>(Xt, y);
-  out.template segment<2>(4) = transposed_rows_times<Index, 4>(Xt, y);
-}
-
-// Column J of A X: sum over k of A.col(k) X(k, J), left to right.
+// Rows P, P + 1 of column J of A X: sum over k of A(P.., k) X(k, J), left to right; a[k] holds
+// (A(P, k), A(P + 1, k)).
 template <int Index, int J, int... K>
-EIGEN_ALWAYS_INLINE Vector6 times_column(const Matrix6& A, const Matrix6& X,
-                                         std::integer_sequence<int, K...>) {
+EIGEN_ALWAYS_INLINE Packet times_column(const Packet (&a)[6], const Matrix6& X,
+                                        std::integer_sequence<int, K...>) {
   constexpr Pattern p = pattern_at(Index);
   constexpr int first = first_nonzero_row(p, J);
-  Vector6 sum = A.col(first) * X(first, J);
-  ((K > first && nonzero(p, K, J) ? (sum += A.col(K) * X(K, J), 0) : 0), ...);
+  Packet sum = Eigen::internal::pmul(a[first], Eigen::internal::pset1<Packet>(X(first, J)));
+  ((K > first && nonzero(p, K, J)
+        ? (sum = Eigen::internal::padd(
+               sum, Eigen::internal::pmul(a[K], Eigen::internal::pset1<Packet>(X(K, J)))),
+           0)
+        : 0),
+   ...);
   return sum;
 }
 
@@ -128,35 +126,77 @@ EIGEN_ALWAYS_INLINE Vector6 times_column(const Matrix6& A, const Matrix6& X,
 // joint to its parent: parent = start + X^T C X (Featherstone Table 6.2, start being the
 // parent's own inertia or its composite so far), F = X^T F. One call per body, so that a
 // pattern's products are dispatched once.
+// Row-major, so that two forces' entries k are one packet.
 template <int Columns>
-using Forces = Eigen::Matrix<double, 6, Columns>;
+using Forces = Eigen::Matrix<double, 6, Columns, Eigen::RowMajor>;
 
 template <int Index>
 struct Structured {
   // Appends X^T f for the first count columns f of forces to parent_forces after its first
   // parent_count columns.
-  // Flattened: Eigen's small assignments inside are otherwise left as calls in a large unit.
   template <int Columns>
-  [[gnu::flatten]] static void carry_to_parent(Matrix6& parent, const Matrix6& start,
-                                               const Matrix6& X, const Matrix6& C,
-                                               const Forces<Columns>& forces, int count,
-                                               Forces<Columns>& parent_forces, int parent_count) {
+  static void carry_to_parent(Matrix6& parent, const Matrix6& start, const Matrix6& X,
+                              const Matrix6& C, const Forces<Columns>& forces, int count,
+                              Forces<Columns>& parent_forces, int parent_count) {
+    namespace ei = Eigen::internal;
     constexpr auto rows = std::make_integer_sequence<int, 6>{};
-    const Matrix6 Xt = X.transpose();
-    for (int c = 0; c < count; ++c) {
-      transposed_times<Index>(Xt, forces.col(c), parent_forces.col(parent_count + c));
+    // Forces two at a time, lanes (f_c, f_c+1); an odd last one on both lanes.
+    for (int c = 0; c < count; c += 2) {
+      Packet f[6];
+      if (c + 1 < count) {
+        for (int k = 0; k < 6; ++k) f[k] = ei::ploadu<Packet>(&forces(k, c));
+        transposed_into<false, Columns>(X, f, &parent_forces(0, parent_count + c), rows);
+      } else {
+        for (int k = 0; k < 6; ++k) f[k] = ei::pset1<Packet>(forces(k, c));
+        transposed_into<true, Columns>(X, f, &parent_forces(0, parent_count + c), rows);
+      }
     }
-    Matrix6 XtC;
-    for (int j = 0; j < 6; ++j) transposed_times<Index>(Xt, C.col(j), XtC.col(j));
-    add_columns(parent, start, XtC, X, rows);
+    // X^T C by rows, lanes (C(k, j), C(k, j + 1)), kept row-major.
+    Packet c_pairs[3][6];
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 6; ++k) c_pairs[j][k] = ei::pgather<double, Packet>(&C(k, 2 * j), 6);
+    }
+    alignas(16) double XtC[6][6];
+    store_rows(X, c_pairs, XtC, rows);
+    // parent = start + (X^T C) X by columns, lanes (rows P, P + 1).
+    Packet a[3][6];
+    for (int q = 0; q < 3; ++q) {
+      for (int k = 0; k < 6; ++k) a[q][k] = ei::pgather<double, Packet>(&XtC[2 * q][k], 6);
+    }
+    add_columns(parent, start, a, X, rows);
   }
 
  private:
+  // out points at entry (0, c) of a row-major 6 x Columns matrix: rows I, columns c and c + 1
+  // (only c if Single).
+  template <bool Single, int Columns, int... I>
+  static EIGEN_ALWAYS_INLINE void transposed_into(const Matrix6& X, const Packet (&f)[6],
+                                                  double* out, std::integer_sequence<int, I...>) {
+    if constexpr (Single) {
+      ((out[I * Columns] = Eigen::internal::pfirst(transposed_row_times<Index, I>(X, f))), ...);
+    } else {
+      (Eigen::internal::pstoreu(out + I * Columns, transposed_row_times<Index, I>(X, f)), ...);
+    }
+  }
+  template <int... I>
+  static EIGEN_ALWAYS_INLINE void store_rows(const Matrix6& X, const Packet (&c_pairs)[3][6],
+                                             double (&XtC)[6][6],
+                                             std::integer_sequence<int, I...>) {
+    for (int j = 0; j < 3; ++j) {
+      (Eigen::internal::pstore(&XtC[I][2 * j], transposed_row_times<Index, I>(X, c_pairs[j])), ...);
+    }
+  }
   template <int... J>
   static EIGEN_ALWAYS_INLINE void add_columns(Matrix6& parent, const Matrix6& start,
-                                              const Matrix6& A, const Matrix6& X,
+                                              const Packet (&a)[3][6], const Matrix6& X,
                                               std::integer_sequence<int, J...> rows) {
-    ((parent.col(J) = start.col(J) + times_column<Index, J>(A, X, rows)), ...);
+    for (int q = 0; q < 3; ++q) {
+      (Eigen::internal::pstoreu(
+           &parent(2 * q, J),
+           Eigen::internal::padd(Eigen::internal::ploadu<Packet>(&start(2 * q, J)),
+                                 times_column<Index, J>(a[q], X, rows))),
+       ...);
+    }
   }
 };
 

@@ -92,7 +92,7 @@ class BasicDynamics {
   std::array<Vector6, kBodies> velocity_, acceleration_, force_;
   std::array<Matrix6, kBodies> composite_;
   // The CRBA's forces I^c_k S_k of the joints k in a body's subtree, carried to that body.
-  std::array<Eigen::Matrix<double, 6, kBodies>, kBodies> subtree_force_;
+  std::array<Eigen::Matrix<double, 6, kBodies, Eigen::RowMajor>, kBodies> subtree_force_;
   MassMatrix mass_matrix_;
   // Factorised once at construction, so that a copy never reads an uninitialised state.
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
