@@ -80,6 +80,9 @@ constexpr int first_nonzero_row(Pattern p, int col) {
 // round exactly as the dense expressions' packets do.
 using Packet = Eigen::internal::Packet2d;
 
+// X's entries, each on both lanes of a packet.
+using Broadcast = Packet[6][6];
+
 // a + b where either term may be absent (an exact zero in the dense sum).
 template <bool HasA, bool HasB>
 EIGEN_ALWAYS_INLINE Packet sum_of(const Packet& a, const Packet& b) {
@@ -91,13 +94,11 @@ EIGEN_ALWAYS_INLINE Packet sum_of(const Packet& a, const Packet& b) {
 // Sum over k of X(k, I) y_k in the two-lane order above, for two vectors y at once (the two lanes
 // of y[k]): both lanes share X's column I, so the terms left out are the same in both.
 template <int Index, int I>
-EIGEN_ALWAYS_INLINE Packet transposed_row_times(const Matrix6& X, const Packet (&y)[6]) {
+EIGEN_ALWAYS_INLINE Packet transposed_row_times(const Broadcast& X, const Packet (&y)[6]) {
   constexpr Pattern p = pattern_at(Index);
   constexpr bool n0 = nonzero(p, 0, I), n1 = nonzero(p, 1, I), n2 = nonzero(p, 2, I);
   constexpr bool n3 = nonzero(p, 3, I), n4 = nonzero(p, 4, I), n5 = nonzero(p, 5, I);
-  const auto term = [&](int k) {
-    return Eigen::internal::pmul(Eigen::internal::pset1<Packet>(X(k, I)), y[k]);
-  };
+  const auto term = [&](int k) { return Eigen::internal::pmul(X[k][I], y[k]); };
   constexpr bool n24 = n2 || n4, n35 = n3 || n5;
   const Packet even = sum_of<n0, n24>(term(0), sum_of<n2, n4>(term(2), term(4)));
   const Packet odd = sum_of<n1, n35>(term(1), sum_of<n3, n5>(term(3), term(5)));
@@ -108,15 +109,13 @@ EIGEN_ALWAYS_INLINE Packet transposed_row_times(const Matrix6& X, const Packet (
 // Rows P, P + 1 of column J of A X: sum over k of A(P.., k) X(k, J), left to right; a[k] holds
 // (A(P, k), A(P + 1, k)).
 template <int Index, int J, int... K>
-EIGEN_ALWAYS_INLINE Packet times_column(const Packet (&a)[6], const Matrix6& X,
+EIGEN_ALWAYS_INLINE Packet times_column(const Packet (&a)[6], const Broadcast& X,
                                         std::integer_sequence<int, K...>) {
   constexpr Pattern p = pattern_at(Index);
   constexpr int first = first_nonzero_row(p, J);
-  Packet sum = Eigen::internal::pmul(a[first], Eigen::internal::pset1<Packet>(X(first, J)));
+  Packet sum = Eigen::internal::pmul(a[first], X[first][J]);
   ((K > first && nonzero(p, K, J)
-        ? (sum = Eigen::internal::padd(
-               sum, Eigen::internal::pmul(a[K], Eigen::internal::pset1<Packet>(X(K, J)))),
-           0)
+        ? (sum = Eigen::internal::padd(sum, Eigen::internal::pmul(a[K], X[K][J])), 0)
         : 0),
    ...);
   return sum;
@@ -140,15 +139,17 @@ struct Structured {
                               Forces<Columns>& parent_forces, int parent_count) {
     namespace ei = Eigen::internal;
     constexpr auto rows = std::make_integer_sequence<int, 6>{};
+    Broadcast x;  // the entries that are not zero
+    broadcast(X, x, std::make_integer_sequence<int, 36>{});
     // Forces two at a time, lanes (f_c, f_c+1); an odd last one on both lanes.
     for (int c = 0; c < count; c += 2) {
       Packet f[6];
       if (c + 1 < count) {
         for (int k = 0; k < 6; ++k) f[k] = ei::ploadu<Packet>(&forces(k, c));
-        transposed_into<false, Columns>(X, f, &parent_forces(0, parent_count + c), rows);
+        transposed_into<false, Columns>(x, f, &parent_forces(0, parent_count + c), rows);
       } else {
         for (int k = 0; k < 6; ++k) f[k] = ei::pset1<Packet>(forces(k, c));
-        transposed_into<true, Columns>(X, f, &parent_forces(0, parent_count + c), rows);
+        transposed_into<true, Columns>(x, f, &parent_forces(0, parent_count + c), rows);
       }
     }
     // X^T C by rows, lanes (C(k, j), C(k, j + 1)), kept row-major.
@@ -157,20 +158,29 @@ struct Structured {
       for (int k = 0; k < 6; ++k) c_pairs[j][k] = ei::pgather<double, Packet>(&C(k, 2 * j), 6);
     }
     alignas(16) double XtC[6][6];
-    store_rows(X, c_pairs, XtC, rows);
+    store_rows(x, c_pairs, XtC, rows);
     // parent = start + (X^T C) X by columns, lanes (rows P, P + 1).
     Packet a[3][6];
     for (int q = 0; q < 3; ++q) {
       for (int k = 0; k < 6; ++k) a[q][k] = ei::pgather<double, Packet>(&XtC[2 * q][k], 6);
     }
-    add_columns(parent, start, a, X, rows);
+    add_columns(parent, start, a, x, rows);
   }
 
  private:
+  template <int... E>
+  static EIGEN_ALWAYS_INLINE void broadcast(const Matrix6& X, Broadcast& x,
+                                            std::integer_sequence<int, E...>) {
+    constexpr Pattern p = pattern_at(Index);
+    ((nonzero(p, E / 6, E % 6)
+          ? (x[E / 6][E % 6] = Eigen::internal::pset1<Packet>(X(E / 6, E % 6)), 0)
+          : 0),
+     ...);
+  }
   // out points at entry (0, c) of a row-major 6 x Columns matrix: rows I, columns c and c + 1
   // (only c if Single).
   template <bool Single, int Columns, int... I>
-  static EIGEN_ALWAYS_INLINE void transposed_into(const Matrix6& X, const Packet (&f)[6],
+  static EIGEN_ALWAYS_INLINE void transposed_into(const Broadcast& X, const Packet (&f)[6],
                                                   double* out, std::integer_sequence<int, I...>) {
     if constexpr (Single) {
       ((out[I * Columns] = Eigen::internal::pfirst(transposed_row_times<Index, I>(X, f))), ...);
@@ -179,7 +189,7 @@ struct Structured {
     }
   }
   template <int... I>
-  static EIGEN_ALWAYS_INLINE void store_rows(const Matrix6& X, const Packet (&c_pairs)[3][6],
+  static EIGEN_ALWAYS_INLINE void store_rows(const Broadcast& X, const Packet (&c_pairs)[3][6],
                                              double (&XtC)[6][6],
                                              std::integer_sequence<int, I...>) {
     for (int j = 0; j < 3; ++j) {
@@ -188,7 +198,7 @@ struct Structured {
   }
   template <int... J>
   static EIGEN_ALWAYS_INLINE void add_columns(Matrix6& parent, const Matrix6& start,
-                                              const Packet (&a)[3][6], const Matrix6& X,
+                                              const Packet (&a)[3][6], const Broadcast& X,
                                               std::integer_sequence<int, J...> rows) {
     for (int q = 0; q < 3; ++q) {
       (Eigen::internal::pstoreu(
