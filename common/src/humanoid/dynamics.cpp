@@ -56,6 +56,8 @@ BasicDynamics<A>::BasicDynamics(const Model& model) : model_(model) {
     subtree_dof_[i][subtree_size_[i]++] = dof_of(i);
     const int parent = model_.bodies[i].parent;
     offset_in_parent_[i] = subtree_size_[parent];
+    first_into_parent_[i] = !has_children_[parent];
+    has_children_[parent] = true;
     for (int c = 0; c < subtree_size_[i]; ++c) {
       subtree_dof_[parent][subtree_size_[parent]++] = subtree_dof_[i][c];
     }
@@ -91,9 +93,8 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
   // Composite inertias, leaves to root (Table 6.2): I^c_parent += X^T I^c X, starting from the
   // parent's own inertia. Body i's children come first, so I^c_i is complete when i is reached;
   // a body without children is its own composite.
-  std::array<bool, kBodies> has_children{};
   const auto composite = [&](int i) -> const Matrix6& {
-    return has_children[i] ? composite_[i] : inertia_[i];
+    return has_children_[i] ? composite_[i] : inertia_[i];
   };
   for (int i = kBodies - 1; i > 0; --i) {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
@@ -117,9 +118,9 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
     mass_matrix_(dof_of(i), dof_of(i)) += model_.armature[i - 1];
     const int parent = model_.bodies[i].parent;
     joint_transform::kCarryToParent<kBodies>[transform_pattern_[i]](
-        composite_[parent], composite(parent), transform_[i], composite(i), subtree_force_[i],
-        count, subtree_force_[parent], offset_in_parent_[i]);
-    has_children[parent] = true;
+        composite_[parent], first_into_parent_[i] ? inertia_[parent] : composite_[parent],
+        transform_[i], composite(i), subtree_force_[i], count, subtree_force_[parent],
+        offset_in_parent_[i]);
   }
   // Base block: S_0 = identity, so M_00 = I^c_0 and M_0k = F.
   mass_matrix_.template topLeftCorner<6, 6>() = composite(0);

@@ -152,18 +152,15 @@ struct Structured {
         transposed_into<true, Columns>(x, f, &parent_forces(0, parent_count + c), rows);
       }
     }
-    // X^T C by rows, lanes (C(k, j), C(k, j + 1)), kept row-major.
+    // X^T C by rows, lanes (C(k, j), C(k, j + 1)), then each 2 x 2 block transposed: a[q][k]
+    // holds (X^T C)(2q, k) and (2q + 1, k).
     Packet c_pairs[3][6];
     for (int j = 0; j < 3; ++j) {
       for (int k = 0; k < 6; ++k) c_pairs[j][k] = ei::pgather<double, Packet>(&C(k, 2 * j), 6);
     }
-    alignas(16) double XtC[6][6];
-    store_rows(x, c_pairs, XtC, rows);
-    // parent = start + (X^T C) X by columns, lanes (rows P, P + 1).
     Packet a[3][6];
-    for (int q = 0; q < 3; ++q) {
-      for (int k = 0; k < 6; ++k) a[q][k] = ei::pgather<double, Packet>(&XtC[2 * q][k], 6);
-    }
+    row_pairs(x, c_pairs, a, std::make_integer_sequence<int, 3>{});
+    // parent = start + (X^T C) X by columns, lanes (rows P, P + 1).
     add_columns(parent, start, a, x, rows);
   }
 
@@ -188,13 +185,30 @@ struct Structured {
       (Eigen::internal::pstoreu(out + I * Columns, transposed_row_times<Index, I>(X, f)), ...);
     }
   }
-  template <int... I>
-  static EIGEN_ALWAYS_INLINE void store_rows(const Broadcast& X, const Packet (&c_pairs)[3][6],
-                                             double (&XtC)[6][6],
-                                             std::integer_sequence<int, I...>) {
+  template <int... Q>
+  static EIGEN_ALWAYS_INLINE void row_pairs(const Broadcast& X, const Packet (&c_pairs)[3][6],
+                                            Packet (&a)[3][6], std::integer_sequence<int, Q...>) {
     for (int j = 0; j < 3; ++j) {
-      (Eigen::internal::pstore(&XtC[I][2 * j], transposed_row_times<Index, I>(X, c_pairs[j])), ...);
+      (transpose_block(transposed_row_times<Index, 2 * Q>(X, c_pairs[j]),
+                       transposed_row_times<Index, 2 * Q + 1>(X, c_pairs[j]), a[Q][2 * j],
+                       a[Q][2 * j + 1]),
+       ...);
     }
+  }
+  // Eigen's own 2 x 2 transpose; its block type takes the packet (a vector type) as a template
+  // argument, which GCC warns drops the type's alignment attribute, harmlessly: the block is a
+  // local that only lives in registers.
+  static EIGEN_ALWAYS_INLINE void transpose_block(const Packet& upper, const Packet& lower,
+                                                  Packet& left, Packet& right) {
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wignored-attributes"
+    Eigen::internal::PacketBlock<Packet, 2> block;
+#pragma GCC diagnostic pop
+    block.packet[0] = upper;
+    block.packet[1] = lower;
+    Eigen::internal::ptranspose(block);
+    left = block.packet[0];
+    right = block.packet[1];
   }
   template <int... J>
   static EIGEN_ALWAYS_INLINE void add_columns(Matrix6& parent, const Matrix6& start,

@@ -82,10 +82,12 @@ class BasicDynamics {
   std::array<int, kBodies> transform_pattern_{};
   std::array<int, kBodies> coordinate_axis_{};
   // The joints in each body's subtree in the CRBA's order (its children's, as carried up, then
-  // its own), how many, and where a body's list starts in its parent's.
+  // its own), how many, and where a body's list starts in its parent's; which bodies have
+  // children, and which child is carried into its parent first.
   std::array<std::array<int, kBodies>, kBodies> subtree_dof_{};
   std::array<int, kBodies> subtree_size_{};
   std::array<int, kBodies> offset_in_parent_{};
+  std::array<bool, kBodies> has_children_{}, first_into_parent_{};
   // Workspace.
   Configuration configuration_;             // of set_configuration()
   std::array<Matrix6, kBodies> transform_;  // X from parent (or world) to body coordinates
