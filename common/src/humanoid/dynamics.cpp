@@ -117,10 +117,10 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
     }
     mass_matrix_(dof_of(i), dof_of(i)) += model_.armature[i - 1];
     const int parent = model_.bodies[i].parent;
-    joint_transform::kCarryToParent<kBodies>[transform_pattern_[i]](
-        composite_[parent], first_into_parent_[i] ? inertia_[parent] : composite_[parent],
-        transform_[i], composite(i), subtree_force_[i], count, subtree_force_[parent],
-        offset_in_parent_[i]);
+    const auto carry = joint_transform::carry_for<kBodies>(transform_pattern_[i]);
+    carry(composite_[parent], first_into_parent_[i] ? inertia_[parent] : composite_[parent],
+          transform_[i], composite(i), subtree_force_[i], count, subtree_force_[parent],
+          offset_in_parent_[i]);
   }
   // Base block: S_0 = identity, so M_00 = I^c_0 and M_0k = F.
   mass_matrix_.template topLeftCorner<6, 6>() = composite(0);

@@ -14,6 +14,9 @@
 // - X^T times a column (the coefficient-based product of a transposed matrix is a dot product
 //   per entry, reduced in two lanes of even and odd terms): (t0 + (t2 + t4)) + (t1 + (t3 + t5)).
 // - A matrix times X (column-major packets over rows): t0 + t1 + ... + t5, left to right.
+// Each entry is computed on its own, so which entries share a packet is free: the packets here
+// pair entries whose left-out terms are the same, two forces or two columns of C at once for
+// X^T, two rows at once for A X.
 #pragma once
 
 #include <Eigen/Core>
@@ -121,13 +124,14 @@ EIGEN_ALWAYS_INLINE Packet times_column(const Packet (&a)[6], const Broadcast& X
   return sum;
 }
 
+// Forces as columns, stored by rows, so that two forces' entries k are one packet.
+template <int Columns>
+using Forces = Eigen::Matrix<double, 6, Columns, Eigen::RowMajor>;
+
 // Carrying a body's composite inertia C and the forces that reach it (columns of F) across its
 // joint to its parent: parent = start + X^T C X (Featherstone Table 6.2, start being the
 // parent's own inertia or its composite so far), F = X^T F. One call per body, so that a
 // pattern's products are dispatched once.
-// Row-major, so that two forces' entries k are one packet.
-template <int Columns>
-using Forces = Eigen::Matrix<double, 6, Columns, Eigen::RowMajor>;
 
 template <int Index>
 struct Structured {
@@ -152,11 +156,14 @@ struct Structured {
         transposed_into<true, Columns>(x, f, &parent_forces(0, parent_count + c), rows);
       }
     }
-    // X^T C by rows, lanes (C(k, j), C(k, j + 1)), then each 2 x 2 block transposed: a[q][k]
-    // holds (X^T C)(2q, k) and (2q + 1, k).
+    // X^T C by rows, lanes (C(k, j), C(k, j + 1)) (2 x 2 blocks of C transposed), then each 2 x
+    // 2 block of the product transposed back: a[q][k] holds (X^T C)(2q, k) and (2q + 1, k).
     Packet c_pairs[3][6];
     for (int j = 0; j < 3; ++j) {
-      for (int k = 0; k < 6; ++k) c_pairs[j][k] = ei::pgather<double, Packet>(&C(k, 2 * j), 6);
+      for (int k = 0; k < 6; k += 2) {
+        transpose_block(ei::ploadu<Packet>(&C(k, 2 * j)), ei::ploadu<Packet>(&C(k, 2 * j + 1)),
+                        c_pairs[j][k], c_pairs[j][k + 1]);
+      }
     }
     Packet a[3][6];
     row_pairs(x, c_pairs, a, std::make_integer_sequence<int, 3>{});
@@ -195,9 +202,9 @@ struct Structured {
        ...);
     }
   }
-  // Eigen's own 2 x 2 transpose; its block type takes the packet (a vector type) as a template
-  // argument, which GCC warns drops the type's alignment attribute, harmlessly: the block is a
-  // local that only lives in registers.
+  // Eigen's own 2 x 2 packet transpose. Its block type takes the packet, a vector type, as a
+  // template argument, on which GCC warns that the type's attributes are ignored; Eigen's own
+  // headers silence the same warning for the same use.
   static EIGEN_ALWAYS_INLINE void transpose_block(const Packet& upper, const Packet& lower,
                                                   Packet& left, Packet& right) {
 #pragma GCC diagnostic push
@@ -235,7 +242,10 @@ constexpr std::array<CarryToParent<Columns>, kPatterns> carry_table(
   return {{&Structured<Index>::template carry_to_parent<Columns>...}};
 }
 template <int Columns>
-inline constexpr std::array<CarryToParent<Columns>, kPatterns> kCarryToParent =
-    carry_table<Columns>(std::make_integer_sequence<int, kPatterns>{});
+CarryToParent<Columns> carry_for(int pattern_index) {
+  static constexpr std::array<CarryToParent<Columns>, kPatterns> table =
+      carry_table<Columns>(std::make_integer_sequence<int, kPatterns>{});
+  return table[pattern_index];
+}
 
 }  // namespace hmpc::humanoid::joint_transform
