@@ -190,20 +190,28 @@ void BasicDynamicsDerivatives<A>::forward_dynamics_derivatives(
     }
   }
   mass_matrix_.diagonal().template tail<Dimensions<A>::kJoints>() += model_.armature;
-  // M^-1 = L^-T L^-1 from M = L L^T, L^-1 by forward substitution column by column: at 14x14
-  // these plain loops and coefficient-wise products beat Eigen's blocked triangular solves.
+  // M^-1 = L^-T L^-1 from M = L L^T. L^-1 by forward substitution a row at a time, row i being
+  // (e_i - sum over k < i of L_ik row k) / L_ii: kept as the columns of L^-T, each row is one
+  // vectorised column update, and the rows' entries do not wait on each other.
   cholesky_.compute(mass_matrix_);
   const MassMatrix& L = cholesky_.matrixLLT();  // lower triangle: L
-  MassMatrix inverse_l = MassMatrix::Zero();
+  const Velocity reciprocal = L.diagonal().cwiseInverse();
+  MassMatrix inverse_l_transposed;
+  for (int i = 0; i < kDofs; ++i) {
+    Velocity row = Velocity::Unit(i);
+    for (int k = 0; k < i; ++k) row -= L(i, k) * inverse_l_transposed.col(k);
+    inverse_l_transposed.col(i) = row * reciprocal[i];
+  }
+  const MassMatrix inverse_l = inverse_l_transposed.transpose();
+  // M^-1 is symmetric and L^-1 lower triangular: (M^-1)_ij = sum over k >= i of
+  // (L^-1)_ki (L^-1)_kj for i >= j, a sixth of the dense product's multiplications.
   for (int j = 0; j < kDofs; ++j) {
-    inverse_l(j, j) = 1.0 / L(j, j);
-    for (int i = j + 1; i < kDofs; ++i) {
-      double sum = 0.0;
-      for (int k = j; k < i; ++k) sum += L(i, k) * inverse_l(k, j);
-      inverse_l(i, j) = -sum / L(i, i);
+    for (int i = j; i < kDofs; ++i) {
+      const double m = inverse_l.col(i).tail(kDofs - i).dot(inverse_l.col(j).tail(kDofs - i));
+      out.da_dtau(i, j) = m;
+      out.da_dtau(j, i) = m;
     }
   }
-  out.da_dtau.noalias() = inverse_l.transpose().lazyProduct(inverse_l);
   // a = M^-1 (tau - c), then the derivatives at it: da/dx = -M^-1 d tau/dx, da/dtau = M^-1.
   out.a.noalias() = out.da_dtau * (tau - bias);
   acceleration_pass(out.a);
