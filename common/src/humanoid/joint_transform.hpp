@@ -42,7 +42,7 @@ constexpr int kPatterns = 4 * 8;
 constexpr int index_of(Pattern p) { return (p.axis + 1) * 8 + p.origin_mask; }
 constexpr Pattern pattern_at(int index) { return {index / 8 - 1, index % 8}; }
 
-// The pattern of a joint from its axis (a unit vector) and origin.
+// The pattern of a joint from its axis and origin, as the model gives them.
 inline Pattern pattern_of(const Vector3& axis, const Vector3& origin) {
   int coordinate = -1;
   for (int m = 0; m < 3; ++m) {
@@ -72,7 +72,7 @@ constexpr bool nonzero(Pattern p, int row, int col) {
   if (row < 3) return col < 3 && rotation_nonzero(p, row, col);
   return col < 3 ? shift_nonzero(p, row - 3, col) : rotation_nonzero(p, row - 3, col - 3);
 }
-// The first non-zero entry of X's column col (its diagonal is never zero).
+// The first entry of X's column col that the pattern keeps (every pattern keeps the diagonal).
 constexpr int first_nonzero_row(Pattern p, int col) {
   int row = 0;
   while (!nonzero(p, row, col)) ++row;
