@@ -47,9 +47,8 @@ BasicDynamics<A>::BasicDynamics(const Model& model) : model_(model) {
     const Body& b = model_.bodies[i];
     inertia_[i] = spatial_inertia(b.mass, b.com, b.inertia);
     subspace_[i] << b.axis, Vector3::Zero();
-    const joint_transform::Pattern pattern = joint_transform::pattern_of(b.axis, b.joint_origin);
-    transform_pattern_[i] = joint_transform::index_of(pattern);
-    coordinate_axis_[i] = pattern.axis;
+    transform_pattern_[i] =
+        joint_transform::index_of(joint_transform::pattern_of(b.axis, b.joint_origin));
   }
   // Children have larger indices than their parents (Body), so leaves to root is i descending.
   for (int i = kBodies - 1; i > 0; --i) {
@@ -99,10 +98,11 @@ const BasicMassMatrix<A>& BasicDynamics<A>::mass_matrix() {
   for (int i = kBodies - 1; i > 0; --i) {
     // F = I^c_i S_i is the spatial force that accelerates the composite body i at unit rate;
     // carried to each ancestor j it gives M_ji = S_j^T F (the base: M_0i = F).
-    // About a coordinate axis a, S = +-e_a: I^c S and S^T F are +-(column a) and +-F_a, the
-    // same numbers as the products, whose other terms are exact zeros. (The forces are stored
-    // by rows; a column is copied out so that its dot product adds in the packets' order.)
-    const int a = coordinate_axis_[i], count = subtree_size_[i];
+    // About a coordinate axis a (the pattern's), S = +-e_a: I^c S and S^T F are +-(column a) and
+    // +-F_a, the same numbers as the products, whose other terms are exact zeros. (The forces are
+    // stored by rows; a column is copied out so that its dot product adds in the packets' order.)
+    const int a = joint_transform::pattern_at(transform_pattern_[i]).axis;
+    const int count = subtree_size_[i];
     if (a >= 0) {
       subtree_force_[i].col(count - 1) = composite(i).col(a) * subspace_[i][a];
     } else {

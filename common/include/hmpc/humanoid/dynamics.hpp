@@ -79,10 +79,8 @@ class BasicDynamics {
   Model model_;
   std::array<Matrix6, kBodies> inertia_;   // spatial inertia about the body origin
   std::array<Vector6, kBodies> subspace_;  // motion subspace S of revolute joints
-  // Each joint transform's zero pattern (joint_transform.hpp), for the CRBA's products, and the
-  // coordinate axis a joint turns about (-1: none), whose S picks one entry.
+  // Each joint transform's zero pattern (joint_transform.hpp), for the CRBA's products.
   std::array<int, kBodies> transform_pattern_{};
-  std::array<int, kBodies> coordinate_axis_{};
   // The joints in each body's subtree in the CRBA's order (its children's, as carried up, then
   // its own), how many, and where a body's list starts in its parent's; which bodies have
   // children, and which child is carried into its parent first.
