@@ -225,6 +225,72 @@ TYPED_TEST(HumanoidVariants, MassMatrixIsTheDenseCrbasToTheLastBit) {
   }
 }
 
+// The step map's differenced linearisation moves one coordinate at a time and redoes the RNEA
+// and the kinematics on the subtree it moves only (the base's transform only for the base's
+// pose); that must give the full calls' numbers to the last bit, for every joint's rate,
+// acceleration and angle.
+TYPED_TEST(HumanoidVariants, SubtreeRneaAndKinematicsAreTheFullOnesToTheLastBit) {
+  constexpr int A = TypeParam::value;
+  constexpr int kBodies = Dimensions<A>::kBodies;
+  constexpr int kFirstJoint = 7;  // q: the base's position and quaternion, then the joints
+  std::mt19937 rng(37);
+  std::uniform_real_distribution<double> change(-0.5, 0.5);
+  BasicDynamics<A> partial(this->model), full(this->model);
+  typename BasicDynamics<A>::InverseDynamicsPasses passes;
+  BasicKinematics<A> nominal, moved, expected;
+  const auto differing_kinematics = [&] {
+    int count = 0;
+    for (int i = 0; i < kBodies; ++i) {
+      count += differing_entries(moved.rotation[i], expected.rotation[i]) +
+               differing_entries(moved.position[i], expected.position[i]) +
+               differing_entries(moved.velocity[i], expected.velocity[i]);
+    }
+    return count;
+  };
+  int differing = 0;
+  for (int n = 0; n < 200; ++n) {
+    const RandomState<A> s = random_state(this->model, rng);
+    partial.set_configuration(s.q);
+    partial.inverse_dynamics(s.v, s.tau, passes);
+    partial.kinematics(s.v, nominal);
+    for (int body = 0; body < kBodies; ++body) {
+      // A rate and an acceleration of the body's joint (the base's angular rate for the torso).
+      const int dof = body == 0 ? 2 : kBaseDofs + body - 1;
+      BasicVelocity<A> v = s.v, a = s.tau;
+      v[dof] += change(rng);
+      a[dof] += change(rng);
+      differing += differing_entries(partial.inverse_dynamics_in_subtree(body, v, a, passes),
+                                     full.inverse_dynamics(s.q, v, a));
+      if (body == 0) continue;
+      moved = nominal;
+      partial.kinematics_in_subtree(body, v, moved);
+      full.kinematics(s.q, v, expected);
+      differing += differing_kinematics();
+      // Its angle.
+      BasicConfiguration<A> q = s.q;
+      q[kFirstJoint + body - 1] += change(rng);
+      partial.set_joint_angle(body, q[kFirstJoint + body - 1]);
+      differing += differing_entries(partial.inverse_dynamics_in_subtree(body, s.v, s.tau, passes),
+                                     full.inverse_dynamics(q, s.v, s.tau));
+      moved = nominal;
+      partial.kinematics_in_subtree(body, s.v, moved);
+      full.kinematics(q, s.v, expected);
+      differing += differing_kinematics();
+      partial.set_joint_angle(body, s.q[kFirstJoint + body - 1]);
+    }
+    // The base's pose alone (a quaternion entry), the joints kept.
+    BasicConfiguration<A> q = s.q;
+    q[3 + n % 4] += change(rng);
+    partial.set_base_pose(q);
+    differing += differing_entries(partial.inverse_dynamics(s.v, s.tau),
+                                   full.inverse_dynamics(q, s.v, s.tau));
+    partial.kinematics(s.v, moved);
+    full.kinematics(q, s.v, expected);
+    differing += differing_kinematics();
+  }
+  EXPECT_EQ(differing, 0);
+}
+
 TEST(HumanoidDynamics, MassMatrixIsSymmetricPositiveDefinite) {
   const Model model;
   Dynamics dynamics(model);

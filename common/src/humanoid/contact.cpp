@@ -9,15 +9,12 @@
 namespace hmpc::humanoid {
 namespace {
 
-// log(1 + e^x) without overflow: max(x, 0) + log1p(e^-|x|).
-double softplus(double x) { return std::max(x, 0.0) + std::log1p(std::exp(-std::abs(x))); }
-
-// The logistic function, softplus' derivative, without overflow.
-double logistic(double x) {
-  if (x >= 0.0) return 1.0 / (1.0 + std::exp(-x));
-  const double e = std::exp(x);
-  return e / (1.0 + e);
-}
+// log(1 + e^x) and its slope, the logistic function, without overflow, from e = e^-|x|: where
+// both are needed they share one exponential (the numbers are those of each alone).
+double softplus(double x, double e) { return std::max(x, 0.0) + std::log1p(e); }
+double logistic(double x, double e) { return x >= 0.0 ? 1.0 / (1.0 + e) : e / (1.0 + e); }
+double softplus(double x) { return softplus(x, std::exp(-std::abs(x))); }
+double logistic(double x) { return logistic(x, std::exp(-std::abs(x))); }
 
 }  // namespace
 
@@ -89,11 +86,23 @@ double BasicContactModel<A>::seat_window(double x, double* slope) const {
 template <int A>
 Vector3 BasicContactModel<A>::point_force(double gap, const Vector3& velocity, double scale,
                                           Matrix3* dforce) const {
+  return force_at_depth(depth_of(gap), scale, velocity, dforce);
+}
+
+template <int A>
+double BasicContactModel<A>::depth_of(double gap) const {
+  const double s = contact_.smoothing;
+  return s * softplus(-gap / s);  // (C1)
+}
+
+template <int A>
+Vector3 BasicContactModel<A>::force_at_depth(double depth, double scale, const Vector3& velocity,
+                                             Matrix3* dforce) const {
   const ContactParameters& c = contact_;
-  const double s = c.smoothing, eps = c.clamp_smoothing;
-  const double depth = s * softplus(-gap / s);                // (C1)
+  const double eps = c.clamp_smoothing;
   const double rate_factor = 1.0 - c.damping * velocity.z();  // 1 + c delta_dot
-  const double clamp = eps * softplus(rate_factor / eps);     // g
+  const double y = rate_factor / eps, e = std::exp(-std::abs(y));
+  const double clamp = eps * softplus(y, e);                  // g
   const double normal = scale * c.stiffness * depth * clamp;  // (C2)
   const Eigen::Vector2d slip = velocity.head<2>();
   const double slip_norm = std::sqrt(slip.squaredNorm() + c.slip_velocity * c.slip_velocity);
@@ -107,7 +116,7 @@ Vector3 BasicContactModel<A>::point_force(double gap, const Vector3& velocity, d
         -c.friction * normal / slip_norm *
         (Eigen::Matrix2d::Identity() - slip * slip.transpose() / (slip_norm * slip_norm));
     // d(C2)/dphi_dot = -k delta g'(y) c, g' the logistic.
-    (*dforce)(2, 2) = -scale * c.stiffness * depth * logistic(rate_factor / eps) * c.damping;
+    (*dforce)(2, 2) = -scale * c.stiffness * depth * logistic(y, e) * c.damping;
   }
   return force;
 }
@@ -127,16 +136,32 @@ void BasicContactModel<A>::evaluate_point(int i, const Kinematics& kinematics, c
   out.jacobian[i] = point_jacobian(model_, kinematics, point.body, point.local);
   out.position[i] = p;
   out.velocity[i] = out.jacobian[i] * v;
-  out.force[i] = force_at(i, p, out.velocity[i], out.force_velocity[i]);
+  out.depth[i] = depth_at(i, p);
+  out.scale[i] = window_at(i, p);
+  out.force[i] =
+      force_at_depth(out.depth[i], out.scale[i], out.velocity[i], &out.force_velocity[i]);
+}
+
+template <int A>
+Vector3 BasicContactModel<A>::force_moving(int i, const ContactState& at, const Vector3& velocity,
+                                           Matrix3& dforce) const {
+  return force_at_depth(at.depth[i], at.scale[i], velocity, &dforce);
 }
 
 template <int A>
 Vector3 BasicContactModel<A>::force_at(int i, const Vector3& position, const Vector3& velocity,
                                        Matrix3& dforce) const {
-  const bool seat = i >= kSolePoints;
-  const double gap = seat ? position.z() - contact_.seat_height : position.z();
-  const double scale = seat ? seat_window(position.x()) : 1.0;
-  return point_force(gap, velocity, scale, &dforce);
+  return force_at_depth(depth_at(i, position), window_at(i, position), velocity, &dforce);
+}
+
+template <int A>
+double BasicContactModel<A>::depth_at(int i, const Vector3& position) const {
+  return depth_of(i >= kSolePoints ? position.z() - contact_.seat_height : position.z());
+}
+
+template <int A>
+double BasicContactModel<A>::window_at(int i, const Vector3& position) const {
+  return i >= kSolePoints ? seat_window(position.x()) : 1.0;
 }
 
 template <int A>
@@ -151,9 +176,11 @@ PointForceSlopes BasicContactModel<A>::force_slopes(int i, const Vector3& positi
   double dscale = 0.0;
   const double scale = seat ? seat_window(position.x(), &dscale) : 1.0;
   // (C1), (C2) and their slopes: d depth/dgap = -sigma_d, dg/dv_z = -c sigma_g.
-  const double depth = s * softplus(-gap / s), sigma_d = logistic(-gap / s);
+  const double x_d = -gap / s, e_d = std::exp(-std::abs(x_d));
+  const double depth = s * softplus(x_d, e_d), sigma_d = logistic(x_d, e_d);
   const double y = 1.0 - c.damping * velocity.z();
-  const double clamp = eps * softplus(y / eps), sigma_g = logistic(y / eps);
+  const double x_g = y / eps, e_g = std::exp(-std::abs(x_g));
+  const double clamp = eps * softplus(x_g, e_g), sigma_g = logistic(x_g, e_g);
   const double normal = scale * k * depth * clamp;
   Vector3 dnormal;  // dF_n / d(x, gap, v_z)
   dnormal << dscale * k * depth * clamp, -scale * k * sigma_d * clamp,

@@ -316,22 +316,25 @@ void BasicStepMap<A>::differenced_residual_jacobian(const State& x, const Veloci
         (stop.damping + 2.0 * h * stop.stiffness) * a[i] + stop.stiffness * x.v[i];
     nominal_stop[j] = stop_term(j, x.q[kFirstJoint + j], x.v[i], a[i], h);
   }
-  const Velocity dynamics_term = dynamics_.inverse_dynamics(x.v, a);
+  const Velocity dynamics_term = dynamics_.inverse_dynamics(x.v, a, nominal_passes_);
 
   // Columns by forward differences, r(x + d e_i) - r(x) over d. First v's, while
   // contact_state_ and the dynamics are at x's q: J is kept, and only the points carried by
-  // the entry's joint change velocity.
+  // the entry's joint change velocity; the RNEA is redone on that joint's subtree (all of it
+  // for the base).
   for (int j = 0; j < v_count; ++j) {
     const int i = first_v + j;
     const double d = forward_step(x.v[i]);
     Velocity v = x.v;
     v[i] += d;
-    Velocity change = dynamics_term - dynamics_.inverse_dynamics(v, a);
+    const int moved = moved_body_of_velocity(i);
+    Velocity change =
+        dynamics_term - dynamics_.inverse_dynamics_in_subtree(moved, v, a, nominal_passes_);
     for (int k = 0; k < points; ++k) {
-      if (!contact_.moves_with(k, moved_body_of_velocity(i))) continue;
+      if (!contact_.moves_with(k, moved)) continue;
       const PointJacobian& J = contact_state_.jacobian[k];
       Matrix3 dforce;
-      const Vector3 force = contact_.force_at(k, contact_state_.position[k], J * v, dforce);
+      const Vector3 force = contact_.force_moving(k, contact_state_, J * v, dforce);
       change += contact_term(J, force, dforce, a, h) - contact_terms_[k];
     }
     if (i >= kBaseDofs) {
@@ -340,11 +343,13 @@ void BasicStepMap<A>::differenced_residual_jacobian(const State& x, const Veloci
     }
     residual_jacobian_.col(q_count + j) = change / d;
   }
-  // Then q's. A base translation (q's first three entries, which come first) moves every
-  // point by the same offset and changes neither M, c (gravity is uniform) nor J; any other
-  // entry moves the points its joint carries (every point for the quaternion), which are
-  // evaluated anew into contact_state_.
-  for (int j = 0; j < q_count; ++j) {
+  // Then q's. A base translation (q's first three entries) moves every point by the same
+  // offset and changes neither M, c (gravity is uniform) nor J. A joint angle moves its
+  // subtree: its transform, the kinematics and the RNEA are redone there, and the points it
+  // carries evaluated anew (into contact_state_, so after the translations), then the angle is
+  // put back. The quaternion's entries come last: they move everything (from the base's pose
+  // set anew, which they leave moved).
+  const auto column = [&](int j) {
     const int i = first_q + j;
     const double d = forward_step(x.q[i]);
     Velocity change = Velocity::Zero();
@@ -356,25 +361,44 @@ void BasicStepMap<A>::differenced_residual_jacobian(const State& x, const Veloci
                               contact_state_.velocity[k], dforce);
         change += contact_term(contact_state_.jacobian[k], force, dforce, a, h) - contact_terms_[k];
       }
+      residual_jacobian_.col(j) = change / d;
+      return;
+    }
+    const int moved = moved_body_of_configuration(i);
+    const BasicKinematics<A>* kinematics = &kinematics_;
+    if (i >= kFirstJoint) {
+      dynamics_.set_joint_angle(moved, x.q[i] + d);
+      moved_kinematics_ = kinematics_;
+      dynamics_.kinematics_in_subtree(moved, x.v, moved_kinematics_);
+      kinematics = &moved_kinematics_;
+      change =
+          dynamics_term - dynamics_.inverse_dynamics_in_subtree(moved, x.v, a, nominal_passes_);
     } else {
       Configuration q = x.q;
       q[i] += d;
-      dynamics_.set_configuration(q);
+      dynamics_.set_base_pose(q);
       dynamics_.kinematics(x.v, kinematics_);
       change = dynamics_term - dynamics_.inverse_dynamics(x.v, a);
-      for (int k = 0; k < points; ++k) {
-        if (!contact_.moves_with(k, moved_body_of_configuration(i))) continue;
-        contact_.evaluate_point(k, kinematics_, x.v, contact_state_);
-        change += contact_term(contact_state_.jacobian[k], contact_state_.force[k],
-                               contact_state_.force_velocity[k], a, h) -
-                  contact_terms_[k];
-      }
-      if (i >= kFirstJoint) {
-        const int joint = i - kFirstJoint, row = kBaseDofs + joint;
-        change[row] += stop_term(joint, q[i], x.v[row], a[row], h) - nominal_stop[joint];
-      }
+    }
+    for (int k = 0; k < points; ++k) {
+      if (!contact_.moves_with(k, moved)) continue;
+      contact_.evaluate_point(k, *kinematics, x.v, contact_state_);
+      change += contact_term(contact_state_.jacobian[k], contact_state_.force[k],
+                             contact_state_.force_velocity[k], a, h) -
+                contact_terms_[k];
+    }
+    if (i >= kFirstJoint) {
+      const int joint = i - kFirstJoint, row = kBaseDofs + joint;
+      change[row] += stop_term(joint, x.q[i] + d, x.v[row], a[row], h) - nominal_stop[joint];
+      dynamics_.set_joint_angle(moved, x.q[i]);
     }
     residual_jacobian_.col(j) = change / d;
+  };
+  for (int j = 0; j < q_count; ++j) {
+    if (first_q + j < 3 || first_q + j >= kFirstJoint) column(j);
+  }
+  for (int j = 0; j < q_count; ++j) {
+    if (first_q + j >= 3 && first_q + j < kFirstJoint) column(j);
   }
 }
 

@@ -93,6 +93,8 @@ struct BasicContactState {
   std::array<BasicPointJacobian<ArmJoints>, kContactPoints> jacobian;  // p_dot = J v
   // df / dp_dot, symmetric negative semi-definite (see ContactModel::point_force).
   std::array<Matrix3, kContactPoints> force_velocity;
+  // (C1)'s depth and the seat window at each position (force_moving).
+  std::array<double, kContactPoints> depth, scale;
 };
 
 // How far `points` sole points in contact sink into the ground on average under a vertical
@@ -134,6 +136,10 @@ class BasicContactModel {
   // Force on point i at a world position and velocity, and its velocity derivative (as
   // point_force's).
   Vector3 force_at(int i, const Vector3& position, const Vector3& velocity, Matrix3& dforce) const;
+  // The same where point i is in `at` (evaluate_point's), moving at `velocity` instead: the
+  // same numbers, without the depth and window of a position that has not moved.
+  Vector3 force_moving(int i, const ContactState& at, const Vector3& velocity,
+                       Matrix3& dforce) const;
   // The step map's implicit contact force on point i, phi = f + h D w (D = force_at's dforce,
   // w = J a), and its exact slopes in the point's position, velocity and w (D's own
   // derivatives included), for the analytic linearisation.
@@ -154,6 +160,13 @@ class BasicContactModel {
   Vector3 point_force(double gap, const Vector3& velocity, double scale, Matrix3* dforce) const;
 
  private:
+  // point_force's two parts: (C1)'s depth at a gap; the force from it. Point i's depth and
+  // seat window (1 on the soles) at a world position.
+  double depth_of(double gap) const;
+  double depth_at(int i, const Vector3& position) const;
+  double window_at(int i, const Vector3& position) const;
+  Vector3 force_at_depth(double depth, double scale, const Vector3& velocity,
+                         Matrix3* dforce) const;
   // The seat's window S(x) of the seat's x-range, and S'(x) into `slope` if given.
   double seat_window(double x, double* slope = nullptr) const;
 

@@ -41,6 +41,18 @@ struct BasicKinematics {
   std::array<Vector6, kBodies> velocity;  // spatial velocity (omega, v_origin), body coords
 };
 
+// The RNEA's passes at one (q, v, a), kept so that a change confined to one subtree is redone
+// on that subtree and its path to the root only (BasicDynamics::inverse_dynamics_in_subtree).
+template <int ArmJoints>
+struct BasicInverseDynamicsPasses {
+  static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
+  std::array<Vector6, kBodies> velocity, acceleration;  // body coordinates
+  std::array<Vector6, kBodies> own_force;               // I a + v x* I v, before the children's
+  std::array<Vector6, kBodies> force;                   // with the children's carried to it
+  std::array<Vector6, kBodies> carried;  // X^T force, the body's force in its parent's coordinates
+  BasicVelocity<ArmJoints> tau;
+};
+
 template <int ArmJoints>
 class BasicDynamics {
  public:
@@ -49,6 +61,7 @@ class BasicDynamics {
   using Configuration = BasicConfiguration<ArmJoints>;
   using Velocity = BasicVelocity<ArmJoints>;
   using MassMatrix = BasicMassMatrix<ArmJoints>;
+  using InverseDynamicsPasses = BasicInverseDynamicsPasses<ArmJoints>;
 
   explicit BasicDynamics(const Model& model = Model{});
 
@@ -67,6 +80,25 @@ class BasicDynamics {
   Velocity inverse_dynamics(const Velocity& v, const Velocity& a);
   // kinematics(q, v, out) at that configuration, with the same numbers and no trigonometry.
   void kinematics(const Velocity& v, Kinematics& out) const;
+
+  // Differencing in one coordinate at a time moves one subtree only: a joint's rate or angle
+  // changes the bodies it carries, and the forces on their path to the root. These redo just
+  // that and give the full calls' numbers to the last bit (the same expressions in the same
+  // order; the bodies left out would compute what they computed before).
+  // The RNEA at the current configuration, keeping its passes.
+  Velocity inverse_dynamics(const Velocity& v, const Velocity& a, InverseDynamicsPasses& passes);
+  // The RNEA at (v, a) where only body's joint angle (set_joint_angle) or the rates and
+  // accelerations of the joints in body's subtree differ from those passes' (body 0, the
+  // torso, carries everything: the full RNEA).
+  Velocity inverse_dynamics_in_subtree(int body, const Velocity& v, const Velocity& a,
+                                       const InverseDynamicsPasses& passes);
+  // Turns one joint (body >= 1) to angle, as set_configuration() would; moves the base only
+  // (q's position and quaternion), as it would.
+  void set_joint_angle(int body, double angle);
+  void set_base_pose(const Configuration& q);
+  // out, the kinematics before the joint angle of body (>= 1) or its subtree's rates changed,
+  // updated on that subtree.
+  void kinematics_in_subtree(int body, const Velocity& v, Kinematics& out) const;
   // c(q, v) = RNEA with a = 0.
   Velocity bias_forces(const Configuration& q, const Velocity& v);
   // a = M^-1 (tau - c), by Cholesky (LLT) of M.
@@ -76,6 +108,13 @@ class BasicDynamics {
 
  private:
   static constexpr int kBodies = Dimensions<ArmJoints>::kBodies;
+  // The RNEA's steps for body i: velocity and acceleration from the parent's in from; the
+  // body's own force; its torque, and its force carried into the parent's.
+  void forward_pass(int i, const InverseDynamicsPasses& from, InverseDynamicsPasses& to,
+                    const Velocity& v, const Velocity& a) const;
+  void own_force(int i, InverseDynamicsPasses& passes) const;
+  void backward_pass(int i, InverseDynamicsPasses& passes, const Velocity& a) const;
+
   Model model_;
   std::array<Matrix6, kBodies> inertia_;   // spatial inertia about the body origin
   std::array<Vector6, kBodies> subspace_;  // motion subspace S of revolute joints
@@ -88,10 +127,12 @@ class BasicDynamics {
   std::array<int, kBodies> subtree_size_{};
   std::array<int, kBodies> offset_in_parent_{};
   std::array<bool, kBodies> has_children_{}, first_into_parent_{};
+  // in_subtree_[b][i]: body i is b or one of its descendants.
+  std::array<std::array<bool, kBodies>, kBodies> in_subtree_{};
   // Workspace.
   Configuration configuration_;             // of set_configuration()
   std::array<Matrix6, kBodies> transform_;  // X from parent (or world) to body coordinates
-  std::array<Vector6, kBodies> velocity_, acceleration_, force_;
+  InverseDynamicsPasses passes_;
   std::array<Matrix6, kBodies> composite_;
   // The CRBA's forces I^c_k S_k of the joints k in a body's subtree, carried to that body.
   std::array<Eigen::Matrix<double, 6, kBodies, Eigen::RowMajor>, kBodies> subtree_force_;

@@ -218,7 +218,9 @@ class BasicStepMap {
       Eigen::Matrix<double, kJoints, kJoints>::Identity()};
   // Linearisation workspace (residual_jacobian()).
   Eigen::Matrix<double, kDofs, kStateSize> residual_jacobian_;
-  std::array<Velocity, kContactPoints> contact_terms_;  // J_i^T (f_i + h D_i J_i a) at x
+  std::array<Velocity, kContactPoints> contact_terms_;       // J_i^T (f_i + h D_i J_i a) at x
+  typename Dynamics::InverseDynamicsPasses nominal_passes_;  // the RNEA's at (x, a)
+  BasicKinematics<ArmJoints> moved_kinematics_;              // with one joint angle moved
   Velocity damping_acceleration_;
   BasicDynamicsDerivatives<ArmJoints> derivatives_;
   BasicInverseDynamicsDerivatives<ArmJoints> inverse_;
