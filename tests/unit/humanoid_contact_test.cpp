@@ -14,6 +14,7 @@
 #include "hmpc/humanoid/step.hpp"
 #include "hmpc/platform/linux/heap_monitor.hpp"
 #include "humanoid_mirror.hpp"
+#include "humanoid_random_state.hpp"
 
 namespace {
 
@@ -349,6 +350,46 @@ TEST(HumanoidContact, SittingLoadsTheSeat) {
 // 1e-7 against the contact's 1 mm and 1 cm/s scales err by about (1e-7 / 1e-3)^2 = 1e-8
 // relative in truncation and eps |phi| / 1e-7 = 1e-9 N in round-off: 1e-5 of the largest
 // slope leaves a wide margin and fails any wrong term.
+// The step map's iteration matrix M - h sum_i J_i^T D_i J_i: subtract_damping must give the
+// dense product's numbers to the last bit (the closed loops built on it are chaotic at the level
+// of round-off), for every point (chair included), on the Jacobians of random states and
+// random D (generic numbers in every entry the product reads).
+TEST(HumanoidContact, DampingIsTheDenseProductsToTheLastBit) {
+  ContactParameters parameters;
+  parameters.chair = true;
+  const Model model;
+  const ContactModel contact(model, Parameters{}, parameters);
+  Dynamics dynamics(model);
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> entry(-3e4, 3e4);
+  int differing = 0, products = 0;
+  for (int n = 0; n < 500; ++n) {
+    const State x = hmpc::humanoid::test_states::random_state(model, rng);
+    Kinematics kinematics;
+    dynamics.kinematics(x.q, x.v, kinematics);
+    ContactState state;
+    contact.evaluate(kinematics, x.v, state);
+    const double h = 1e-3 * (1 + n % 5);
+    MassMatrix dense = dynamics.mass_matrix(x.q), ours = dense;
+    for (int i = 0; i < state.count; ++i) {
+      state.force_velocity[i] = Matrix3::NullaryExpr([&] { return entry(rng); });
+      dense.noalias() -=
+          h * state.jacobian[i].transpose() * state.force_velocity[i] * state.jacobian[i];
+      contact.subtract_damping(i, state, h, ours);
+      ++products;
+    }
+#if defined(__FMA__) || defined(__aarch64__) || defined(__ARM_FEATURE_FMA)
+    // Where the compiler may fuse a multiply and an add the two orders are no longer the same.
+    const double tolerance = 1e-15 * dense.norm();
+#else
+    const double tolerance = 0.0;
+#endif
+    differing += static_cast<int>(((ours - dense).array().abs() > tolerance).count());
+  }
+  EXPECT_EQ(products, 500 * kContactPoints);
+  EXPECT_EQ(differing, 0);
+}
+
 TEST(HumanoidContact, ForceSlopesMatchCentralDifferences) {
   ContactParameters parameters;
   parameters.chair = true;

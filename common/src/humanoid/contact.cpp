@@ -71,6 +71,13 @@ BasicContactModel<A>::BasicContactModel(const Model& model, const Parameters& p,
       points_[i++] = {thigh, Vector3(-contact_.thigh_half_depth, 0.0, -fraction * thigh_length)};
     }
   }
+  for (int k = 0; k < kContactPoints; ++k) {
+    int& count = moving_count_[k];
+    for (int d = 0; d < kBaseDofs; ++d) moving_dofs_[k][count++] = d;
+    for (int b = 1; b < Dimensions<A>::kBodies; ++b) {
+      if (moves_with(k, b)) moving_dofs_[k][count++] = kBaseDofs + b - 1;
+    }
+  }
 }
 
 template <int A>
@@ -224,6 +231,25 @@ bool BasicContactModel<A>::moves_with(int i, int body) const {
   int b = points_[i].body;
   while (b > body) b = model_.bodies[b].parent;
   return b == body;
+}
+
+template <int A>
+void BasicContactModel<A>::subtract_damping(int i, const ContactState& state, double h,
+                                            MassMatrix& matrix) const {
+  const BasicPointJacobian<A>& J = state.jacobian[i];
+  const Eigen::Matrix<double, Dimensions<A>::kDofs, 3> scaled =
+      h * J.transpose() * state.force_velocity[i];
+  const std::array<int, Dimensions<A>::kDofs>& dofs = moving_dofs_[i];
+  for (int c = 0; c < moving_count_[i]; ++c) {
+    const int col = dofs[c];
+    for (int r = 0; r < moving_count_[i]; ++r) {
+      const int row = dofs[r];
+      double sum = scaled(row, 0) * J(0, col);
+      sum += scaled(row, 1) * J(1, col);
+      sum += scaled(row, 2) * J(2, col);
+      matrix(row, col) -= sum;
+    }
+  }
 }
 
 template <int A>

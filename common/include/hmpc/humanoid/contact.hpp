@@ -118,6 +118,7 @@ class BasicContactModel {
   using Kinematics = BasicKinematics<ArmJoints>;
   using Velocity = BasicVelocity<ArmJoints>;
   using ContactState = BasicContactState<ArmJoints>;
+  using MassMatrix = BasicMassMatrix<ArmJoints>;
 
   explicit BasicContactModel(const Model& model = Model{},
                              const Parameters& parameters = Parameters{},
@@ -148,6 +149,13 @@ class BasicContactModel {
   // Whether point i is carried by `body` (fixed on it or on a descendant), so moves with its
   // joint.
   bool moves_with(int i, int body) const;
+  // matrix -= h J^T D J for point i of `state` (J its Jacobian, D its force_velocity): the step
+  // map's implicit damping, M - h sum_i J_i^T D_i J_i. With the numbers of that dense product
+  // to the last bit (the same intermediate (h J^T) D, each entry's three terms added left to
+  // right as Eigen's matrix-product kernel adds them), on the rows and columns of the
+  // coordinates that move the point only: J's other columns are exact zeros, which cannot
+  // change a sum. The kernel's packing made the dense product a third of a rollout's time.
+  void subtract_damping(int i, const ContactState& state, double h, MassMatrix& matrix) const;
 
   // sum_i J_i^T f_i: the contact's generalized force, in model.hpp's v coordinates (first six
   // entries the moment about the torso origin and the force, torso coordinates).
@@ -173,6 +181,10 @@ class BasicContactModel {
   Model model_;
   ContactParameters contact_;
   std::array<ContactPoint, kContactPoints> points_;
+  // The coordinates of v that move each point (the base's, then the joints carrying it, in
+  // increasing order), and how many.
+  std::array<std::array<int, Dimensions<ArmJoints>::kDofs>, kContactPoints> moving_dofs_{};
+  std::array<int, kContactPoints> moving_count_{};
 };
 
 // Jacobian of a point fixed on `body` at `local` (body coordinates): p_dot = J v, p world.
