@@ -103,6 +103,34 @@ void BM_Linearise(benchmark::State& state) {
                  (threads == 1 ? " thread" : " threads"));
 }
 
+// Seconds per rollout of the same plan (the line search's unit of work), by Linearisation
+// (which does not change a rollout; the analytic's entry is the one measured).
+double& seconds_per_rollout() {
+  static double s = 0.0;
+  return s;
+}
+
+// One rollout of the N = 10 coarse steps: the model stepped through the offline-optimised
+// standing plan, as the line search steps each candidate.
+void BM_Rollout(benchmark::State& state) {
+  using Problem = HumanoidProblem<kCoarseHorizon>;
+  using Solver = hmpc::Ilqr<Problem, kCoarseHorizon>;
+  const Motion motion = standing_motion();
+  ProblemConfig config;
+  config.step = kCoarseStep;
+  const State x0 = standing_state(config, motion.phases[0].height);
+  const auto problem = std::make_unique<Problem>(motion, x0, config);
+  const auto solver = std::make_unique<Solver>(
+      hmpc::IlqrConfig<double>::with_cap_and_tolerance(kOfflineIterations, kTolerance));
+  solver->solve(*problem, to_vector(x0));
+  for (auto _ : state) {
+    Problem::State x = solver->states()[0];
+    for (int t = 0; t < kCoarseHorizon; ++t) x = problem->dynamics(x, solver->controls()[t], t);
+    benchmark::DoNotOptimize(x[0]);
+  }
+  state.SetLabel("rollout, 1 thread");
+}
+
 // Google Benchmark's console output plus a record of each run's real time per iteration.
 class Recorder : public benchmark::ConsoleReporter {
  public:
@@ -110,6 +138,10 @@ class Recorder : public benchmark::ConsoleReporter {
     for (const Run& run : runs) {
       const double seconds =
           run.GetAdjustedRealTime() / benchmark::GetTimeUnitMultiplier(run.time_unit);
+      if (run.run_name.function_name == "BM_Rollout") {
+        seconds_per_rollout() = seconds;
+        continue;
+      }
       // run_name.args is "linearisation/threads".
       const std::string& args = run.run_name.args;
       const std::size_t slash = args.find('/');
@@ -603,6 +635,7 @@ BENCHMARK(BM_Linearise)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(1.0);
+BENCHMARK(BM_Rollout)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
@@ -663,6 +696,12 @@ int main(int argc, char** argv) {
                 ms(chain_rule, 1) / ms(analytic, 1), ms(chain_rule, 2) / ms(analytic, 2));
     std::printf("  analytic against the reference     %8.1fx    %8.1fx\n",
                 ms(reference, 1) / ms(analytic, 1), ms(reference, 2) / ms(analytic, 2));
+    if (seconds_per_rollout() > 0.0) {
+      std::printf(
+          "  a rollout of the same steps          %8.2f ms (1 thread; a line-search "
+          "candidate)\n",
+          seconds_per_rollout() * 1e3);
+    }
     std::printf(
         "linearisation of N = %d coarse steps (analytic): 1 thread %.2f ms, 2 threads %.2f ms: "
         "speed-up %.2fx\n",

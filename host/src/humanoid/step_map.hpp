@@ -196,8 +196,9 @@ BasicVelocity<A> BasicStepMap<A>::acceleration(const State& x, const JointVector
                  ContactModel::generalized_force(contact);
   rhs.template tail<kJoints>() += tau;
   iteration_matrix_ = dynamics_.mass_matrix();
-  for (int i = 0; i < contact.count; ++i)
+  for (int i = 0; i < contact.count; ++i) {
     contact_.subtract_damping(i, contact, h, iteration_matrix_);
+  }
   for (int j = 0; j < kJoints; ++j) {
     const double qdot = x.v[kBaseDofs + j];
     const JointStop stop =

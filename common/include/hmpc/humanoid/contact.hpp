@@ -154,7 +154,8 @@ class BasicContactModel {
   // to the last bit (the same intermediate (h J^T) D, each entry's three terms added left to
   // right as Eigen's matrix-product kernel adds them), on the rows and columns of the
   // coordinates that move the point only: J's other columns are exact zeros, which cannot
-  // change a sum. The kernel's packing made the dense product a third of a rollout's time.
+  // change a sum. (The dense product packs its small operands for Eigen's kernel, on every
+  // point of every sub-step.)
   void subtract_damping(int i, const ContactState& state, double h, MassMatrix& matrix) const;
 
   // sum_i J_i^T f_i: the contact's generalized force, in model.hpp's v coordinates (first six
