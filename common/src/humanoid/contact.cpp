@@ -77,6 +77,16 @@ BasicContactModel<A>::BasicContactModel(const Model& model, const Parameters& p,
     for (int b = 1; b < Dimensions<A>::kBodies; ++b) {
       if (moves_with(k, b)) moving_dofs_[k][count++] = kBaseDofs + b - 1;
     }
+    MovingRuns& runs = moving_runs_[k];
+    for (int c = 0; c < count; ++c) {
+      const int dof = moving_dofs_[k][c];
+      if (runs.count > 0 && runs.first[runs.count - 1] + runs.length[runs.count - 1] == dof) {
+        ++runs.length[runs.count - 1];
+      } else {
+        runs.first[runs.count] = dof;
+        runs.length[runs.count++] = 1;
+      }
+    }
   }
 }
 
@@ -239,15 +249,19 @@ void BasicContactModel<A>::subtract_damping(int i, const ContactState& state, do
   const BasicPointJacobian<A>& J = state.jacobian[i];
   const Eigen::Matrix<double, Dimensions<A>::kDofs, 3> scaled =
       h * J.transpose() * state.force_velocity[i];
-  const std::array<int, Dimensions<A>::kDofs>& dofs = moving_dofs_[i];
+  const MovingRuns& runs = moving_runs_[i];
   for (int c = 0; c < moving_count_[i]; ++c) {
-    const int col = dofs[c];
-    for (int r = 0; r < moving_count_[i]; ++r) {
-      const int row = dofs[r];
-      double sum = scaled(row, 0) * J(0, col);
-      sum += scaled(row, 1) * J(1, col);
-      sum += scaled(row, 2) * J(2, col);
-      matrix(row, col) -= sum;
+    const int col = moving_dofs_[i][c];
+    const double j0 = J(0, col), j1 = J(1, col), j2 = J(2, col);
+    // Column col's rows from the diagonal down, a run of consecutive rows at a time.
+    for (int run = 0; run < runs.count; ++run) {
+      const int end = runs.first[run] + runs.length[run];
+      const int first = std::max(runs.first[run], col);
+      if (first >= end) continue;
+      const int n = end - first;
+      matrix.col(col).segment(first, n) -=
+          (scaled.col(0).segment(first, n) * j0 + scaled.col(1).segment(first, n) * j1) +
+          scaled.col(2).segment(first, n) * j2;
     }
   }
 }

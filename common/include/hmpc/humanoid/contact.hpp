@@ -149,13 +149,13 @@ class BasicContactModel {
   // Whether point i is carried by `body` (fixed on it or on a descendant), so moves with its
   // joint.
   bool moves_with(int i, int body) const;
-  // matrix -= h J^T D J for point i of `state` (J its Jacobian, D its force_velocity): the step
-  // map's implicit damping, M - h sum_i J_i^T D_i J_i. With the numbers of that dense product
-  // to the last bit (the same intermediate (h J^T) D, each entry's three terms added left to
-  // right as Eigen's matrix-product kernel adds them), on the rows and columns of the
-  // coordinates that move the point only: J's other columns are exact zeros, which cannot
-  // change a sum. (The dense product packs its small operands for Eigen's kernel, on every
-  // point of every sub-step.)
+  // matrix -= h J^T D J for point i of `state` (J its Jacobian, D its force_velocity) on the
+  // lower triangle, all that a Cholesky factorisation reads: the step map's implicit damping,
+  // M - h sum_i J_i^T D_i J_i. With the numbers of that dense product to the last bit (the same
+  // intermediate (h J^T) D, each entry's three terms added left to right as Eigen's
+  // matrix-product kernel adds them), on the coordinates that move the point only: J's other
+  // columns are exact zeros, which cannot change a sum. (The dense product packs its small
+  // operands for Eigen's kernel, on every point of every sub-step.)
   void subtract_damping(int i, const ContactState& state, double h, MassMatrix& matrix) const;
 
   // sum_i J_i^T f_i: the contact's generalized force, in model.hpp's v coordinates (first six
@@ -186,6 +186,12 @@ class BasicContactModel {
   // increasing order), and how many.
   std::array<std::array<int, Dimensions<ArmJoints>::kDofs>, kContactPoints> moving_dofs_{};
   std::array<int, kContactPoints> moving_count_{};
+  // The same coordinates as runs of consecutive indices.
+  struct MovingRuns {
+    int count = 0;
+    std::array<int, Dimensions<ArmJoints>::kDofs> first{}, length{};
+  };
+  std::array<MovingRuns, kContactPoints> moving_runs_{};
 };
 
 // Jacobian of a point fixed on `body` at `local` (body coordinates): p_dot = J v, p world.

@@ -211,7 +211,7 @@ class BasicStepMap {
   // Workspace.
   BasicKinematics<ArmJoints> kinematics_;
   ContactState contact_state_;
-  MassMatrix iteration_matrix_;
+  MassMatrix iteration_matrix_;  // its lower triangle: the Cholesky factorisations read no more
   // Factorised once at construction, so that a copy never reads an uninitialised state.
   Eigen::LLT<MassMatrix> cholesky_{MassMatrix::Identity()};
   Eigen::LLT<Eigen::Matrix<double, kJoints, kJoints>> joint_cholesky_{
