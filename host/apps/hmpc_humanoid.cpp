@@ -73,10 +73,11 @@ int run_and_report(const Motion& motion, const ClosedLoopConfig& config, const s
       s.min_height, s.max_height, last.base.position.z(), last.base.velocity.x(),
       last.base.velocity.y(), last.base.velocity.z());
   std::printf(
-      "solve per %.0f ms sample: max %.1f ms, median %.1f ms; mean iterations %.2f; "
-      "truncated %d, over %.0f ms %d, unusable %d of %zu\n",
-      run.sampling_period * 1e3, s.max_solve_ms, s.median_solve_ms, s.mean_iterations, s.truncated,
-      run.sampling_period * 1e3, s.overruns, s.unusable, run.samples.size());
+      "solve per %.0f ms sample: max %.1f ms, median %.1f ms, 99th percentile %.1f ms; mean "
+      "iterations %.2f; truncated %d, over %.0f ms %d, unusable %d of %zu\n",
+      run.sampling_period * 1e3, s.max_solve_ms, s.median_solve_ms, s.p99_solve_ms,
+      s.mean_iterations, s.truncated, run.sampling_period * 1e3, s.overruns, s.unusable,
+      run.samples.size());
   std::printf("accumulated cost (Sec. 4.3.1, per 30 ms): %.2f\n", s.total_cost);
   std::printf("applied torque's change per sample: RMS %.3f N m, largest %.2f N m\n",
               s.torque_change_rms, s.torque_change_max);

@@ -245,10 +245,18 @@ AtRest closed_loop(const std::vector<std::string>& motions, int threads,
       "solves truncated at 30 ms, cost/Fine both truncated and untruncated (Fig. 2.10's setting)\n",
       kIterationCap, kTolerance, kReachingIterationCap, kReachingTolerance, threads,
       threads == 1 ? "" : "s", name_of(linearisation));
-  std::printf("%-18s %-11s %-4s %8s %8s %5s %5s %5s %9s %9s %-16s| %9s %9s %s\n", "motion", "MPC",
-              "warm", "max [ms]", "med [ms]", ">30ms", "iters", "trunc", "cost", "cost/Fine",
-              "outcome", "untrunc.", "cost/Fine", "outcome untruncated");
+  std::printf("%-18s %-11s %-4s %8s %8s %5s %5s %5s %9s %9s %-16s| %8s %8s %8s %9s %9s %s\n",
+              "motion", "MPC", "warm", "max [ms]", "med [ms]", ">30ms", "iters", "trunc", "cost",
+              "cost/Fine", "outcome", "max [ms]", "med [ms]", "p99 [ms]", "cost", "cost/Fine",
+              "outcome untruncated");
   int below_coarse[2] = {0, 0}, within_fine[2] = {0, 0}, compared[2] = {0, 0};  // [cold, warm]
+  // Coarse-Fast's untruncated solve times against our targets, a median within a sixth of the
+  // 30 ms period and a 99th percentile within a third: the rest of the period is left to the
+  // estimator, the buses and the other thread's work, and a 12 ms period comes within reach.
+  constexpr double kTargetMedianMs = 5.0, kTargetP99Ms = 10.0;
+  int median_met[2] = {0, 0}, p99_met[2] = {0, 0};
+  double largest[2] = {0.0, 0.0};
+  std::string largest_motion[2];
   AtRest at_rest;
   for (const std::string& file : motions) {
     const Motion motion = load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/" + file + ".motion");
@@ -273,18 +281,26 @@ AtRest closed_loop(const std::vector<std::string>& motions, int threads,
           fine_cost[1] = untruncated;
         }
         if (mpc == MpcKind::kCoarse) coarse_cost = untruncated;
+        const ClosedLoopSummary& u = run[1].summary;
         if (mpc == MpcKind::kCoarseFast) {
           ++compared[warm];
           below_coarse[warm] += untruncated <= coarse_cost ? 1 : 0;
           within_fine[warm] += untruncated <= 1.1 * fine_cost[1] ? 1 : 0;
+          median_met[warm] += u.median_solve_ms <= kTargetMedianMs ? 1 : 0;
+          p99_met[warm] += u.p99_solve_ms <= kTargetP99Ms ? 1 : 0;
+          if (u.max_solve_ms > largest[warm]) {
+            largest[warm] = u.max_solve_ms;
+            largest_motion[warm] = file;
+          }
         }
         std::printf(
-            "%-18s %-11s %-4s %8.1f %8.1f %5d %5.2f %5d %9.1f %9.3f %-16s| %9.1f %9.3f %s\n",
+            "%-18s %-11s %-4s %8.1f %8.1f %5d %5.2f %5d %9.1f %9.3f %-16s| %8.1f %8.1f %8.1f %9.1f "
+            "%9.3f %s\n",
             file.c_str(), name_of(mpc), warm ? "yes" : "no", s.max_solve_ms, s.median_solve_ms,
             s.overruns, s.mean_iterations, s.truncated, s.total_cost,
             fine_cost[0] > 0.0 ? s.total_cost / fine_cost[0] : 0.0, brief(run[0].outcome).c_str(),
-            untruncated, fine_cost[1] > 0.0 ? untruncated / fine_cost[1] : 0.0,
-            brief(run[1].outcome).c_str());
+            u.max_solve_ms, u.median_solve_ms, u.p99_solve_ms, untruncated,
+            fine_cost[1] > 0.0 ? untruncated / fine_cost[1] : 0.0, brief(run[1].outcome).c_str());
         if (motion.reach.active) {
           std::printf("    %s %s, truncated: %s\n", name_of(mpc), warm ? "warm" : "cold",
                       run[0].outcome.c_str());
@@ -303,6 +319,11 @@ AtRest closed_loop(const std::vector<std::string>& motions, int threads,
         "motions, within 1.1 x Fine's on %d of %d\n",
         warm ? "warm-started" : "cold", below_coarse[warm], compared[warm], within_fine[warm],
         compared[warm]);
+    std::printf(
+        "untruncated, %s: Coarse-Fast's median solve at most %.0f ms on %d of %d motions, 99th "
+        "percentile at most %.0f ms on %d of %d; largest %.1f ms (%s)\n",
+        warm ? "warm-started" : "cold", kTargetMedianMs, median_met[warm], compared[warm],
+        kTargetP99Ms, p99_met[warm], compared[warm], largest[warm], largest_motion[warm].c_str());
   }
   return at_rest;
 }
@@ -559,21 +580,16 @@ void real_robot(int threads, Linearisation linearisation) {
     config.problem.linearisation = linearisation;
     const ClosedLoopRun run = run_closed_loop(motion, config);
     const ClosedLoopSummary s = summarise(run);
-    std::vector<double> solve;
-    solve.reserve(run.samples.size());
-    for (const ClosedLoopSample& sample : run.samples) solve.push_back(sample.solve_seconds * 1e3);
-    std::sort(solve.begin(), solve.end());
-    const double p99 = solve.empty() ? 0.0 : solve[(solve.size() * 99) / 100];
     const PhysicalCheck check =
         check_for(file, motion, run).value().check;  // each of the four has one
     char over[32], lower[32];
     std::snprintf(over, sizeof over, "%d/%d", s.overruns, s.samples);
     std::snprintf(lower, sizeof lower, "%d/%d", s.lower_layer_acted, s.samples);
     std::printf("%-11s %7d %8.2f %8.2f %8.2f %6.2f %9s %6.2f%% %9s %6.3f %7.3f %s: %s\n",
-                file.c_str(), s.samples, s.max_solve_ms, s.median_solve_ms, p99, s.mean_iterations,
-                over, s.samples > 0 ? 100.0 * s.overruns / s.samples : 0.0, lower, hip_drift(run),
-                s.torque_change_rms, check.passed ? "check passed" : "check FAILED",
-                check.verdict.c_str());
+                file.c_str(), s.samples, s.max_solve_ms, s.median_solve_ms, s.p99_solve_ms,
+                s.mean_iterations, over, s.samples > 0 ? 100.0 * s.overruns / s.samples : 0.0,
+                lower, hip_drift(run), s.torque_change_rms,
+                check.passed ? "check passed" : "check FAILED", check.verdict.c_str());
   }
   std::printf(
       "(the thesis's robot, Sec. 2.7.4: holding the hip max 13.30 ms, 0.84 %% over 12 ms; "

@@ -13,6 +13,7 @@
 #include <initializer_list>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "hmpc/humanoid/physical_checks.hpp"
 #include "hmpc/humanoid/viewing.hpp"
@@ -93,6 +94,26 @@ TEST(HumanoidClosedLoop, SummaryCountsSolvesOverThePeriod) {
   EXPECT_EQ(s.overruns, 2);
   EXPECT_DOUBLE_EQ(s.max_solve_ms, 45.0);
   EXPECT_DOUBLE_EQ(s.median_solve_ms, 29.0);
+  EXPECT_DOUBLE_EQ(s.p99_solve_ms, 45.0);  // under 100 samples, the largest
+}
+
+// The 99th percentile by nearest rank: of 200 solves of 1..200 ms (shuffled), the 198th
+// smallest, which 99 % of them do not exceed; of 100, the 99th, not the largest.
+TEST(HumanoidClosedLoop, SummaryTakesThe99thPercentileByNearestRank) {
+  ClosedLoopRun run;
+  for (int k = 0; k < 200; ++k) {
+    ClosedLoopSample s = sample(0.03 * (k + 1), 0.85, 230.0, 230.0);
+    s.solve_seconds = 1e-3 * ((k * 77) % 200 + 1);  // 77 is coprime to 200: each of 1..200 once
+    run.samples.push_back(s);
+  }
+  EXPECT_DOUBLE_EQ(summarise(run).p99_solve_ms, 198.0);
+  EXPECT_DOUBLE_EQ(summarise(run).max_solve_ms, 200.0);
+  run.samples.resize(100);
+  std::vector<double> kept;
+  for (const ClosedLoopSample& s : run.samples) kept.push_back(s.solve_seconds * 1e3);
+  std::sort(kept.begin(), kept.end());
+  EXPECT_DOUBLE_EQ(summarise(run).p99_solve_ms, kept[98]);
+  EXPECT_LT(summarise(run).p99_solve_ms, summarise(run).max_solve_ms);
 }
 
 // The lower layer counts as acting on a sample where it changed an applied torque by more than

@@ -126,6 +126,7 @@ ClosedLoopSummary summarise(const BasicClosedLoopRun<A>& run) {
   std::sort(solve.begin(), solve.end());
   s.max_solve_ms = solve.back();
   s.median_solve_ms = solve[solve.size() / 2];
+  s.p99_solve_ms = solve[(99 * solve.size() + 99) / 100 - 1];  // rank ceil(0.99 n)
   s.mean_iterations = iterations / static_cast<double>(run.samples.size());
   if (run.samples.size() > 1) {
     s.torque_change_rms =
