@@ -394,6 +394,45 @@ TEST(HumanoidContact, DampingIsTheDenseProductsToTheLastBit) {
   EXPECT_EQ(differing, 0);
 }
 
+// force_reads_position, which lets the step map skip a base translation's unchanged forces:
+// moved along an axis it does not read, every point's force and its velocity derivative are
+// the same to the last bit; along one it reads, a point in contact feels it.
+TEST(HumanoidContact, ForceReadsOnlyThePositionsItSaysItReads) {
+  ContactParameters parameters;
+  parameters.chair = true;
+  const ContactModel model(Model{}, Parameters{}, parameters);
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int unread = 0, read = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    for (int i = 0; i < kContactPoints; ++i) {
+      const double surface = i >= kSolePoints ? parameters.seat_height : 0.0;
+      // In contact (up to 5 mm deep), near the seat's edges in x, sliding or not.
+      const Vector3 p(parameters.seat_x_max + 0.02 * unit(rng), 0.2 * unit(rng),
+                      surface - 0.005 * (0.5 + 0.5 * unit(rng)));
+      const Vector3 v(0.3 * unit(rng), 0.3 * unit(rng), 0.5 * unit(rng));
+      Matrix3 D;
+      const Vector3 f = model.force_at(i, p, v, D);
+      for (int axis = 0; axis < 3; ++axis) {
+        Matrix3 D_moved;
+        const Vector3 f_moved = model.force_at(i, p + 1e-4 * Vector3::Unit(axis), v, D_moved);
+        const bool same =
+            (f_moved.array() == f.array()).all() && (D_moved.array() == D.array()).all();
+        if (ContactModel::force_reads_position(i, axis)) {
+          EXPECT_FALSE(same) << "point " << i << " axis " << axis;
+          ++read;
+        } else {
+          EXPECT_TRUE(same) << "point " << i << " axis " << axis;
+          ++unread;
+        }
+      }
+    }
+  }
+  // Per trial: z on all 14 points, x on the 6 seat points; y and the soles' x unread.
+  EXPECT_EQ(read, 200 * (kContactPoints + kContactPoints - kSolePoints));
+  EXPECT_EQ(unread, 200 * (kContactPoints + kSolePoints));
+}
+
 TEST(HumanoidContact, ForceSlopesMatchCentralDifferences) {
   ContactParameters parameters;
   parameters.chair = true;

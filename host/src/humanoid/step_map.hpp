@@ -343,17 +343,19 @@ void BasicStepMap<A>::differenced_residual_jacobian(const State& x, const Veloci
     residual_jacobian_.col(q_count + j) = change / d;
   }
   // Then q's. A base translation (q's first three entries) moves every point by the same
-  // offset and changes neither M, c (gravity is uniform) nor J. A joint angle moves its
-  // subtree: its transform, the kinematics and the RNEA are redone there, and the points it
-  // carries evaluated anew (into contact_state_, so after the translations), then the angle is
-  // put back. The quaternion's entries come last: they move everything (from the base's pose
-  // set anew, which they leave moved).
+  // offset and changes neither M, c (gravity is uniform) nor J; it changes the forces that
+  // read the coordinate moved only (the others' terms are exactly as at x: their change is 0).
+  // A joint angle moves its subtree: its transform, the kinematics and the RNEA are redone
+  // there, and the points it carries evaluated anew (into contact_state_, so after the
+  // translations), then the angle is put back. The quaternion's entries come last: they move
+  // everything (from the base's pose set anew, which they leave moved).
   const auto column = [&](int j) {
     const int i = first_q + j;
     const double d = forward_step(x.q[i]);
     Velocity change = Velocity::Zero();
     if (i < 3) {
       for (int k = 0; k < points; ++k) {
+        if (!ContactModel::force_reads_position(k, i)) continue;
         Matrix3 dforce;
         const Vector3 force =
             contact_.force_at(k, contact_state_.position[k] + d * Vector3::Unit(i),

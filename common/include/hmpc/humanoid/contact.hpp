@@ -149,6 +149,12 @@ class BasicContactModel {
   // Whether point i is carried by `body` (fixed on it or on a descendant), so moves with its
   // joint.
   bool moves_with(int i, int body) const;
+  // Whether point i's force reads its world position's coordinate `axis` (0..2): the depth
+  // reads z, a seat point's window x, nothing reads y. A point moved along another axis at the
+  // same velocity has the same force to the last bit.
+  static bool force_reads_position(int i, int axis) {
+    return axis == 2 || (axis == 0 && i >= kSolePoints);
+  }
   // matrix -= h J^T D J for point i of `state` (J its Jacobian, D its force_velocity) on the
   // lower triangle, all that a Cholesky factorisation reads: the step map's implicit damping,
   // M - h sum_i J_i^T D_i J_i. With the numbers of that dense product to the last bit (the same
