@@ -173,12 +173,12 @@ Vector3 BasicContactModel<A>::force_at(int i, const Vector3& position, const Vec
 
 template <int A>
 double BasicContactModel<A>::depth_at(int i, const Vector3& position) const {
-  return depth_of(i >= kSolePoints ? position.z() - contact_.seat_height : position.z());
+  return depth_of(is_seat_point(i) ? position.z() - contact_.seat_height : position.z());
 }
 
 template <int A>
 double BasicContactModel<A>::window_at(int i, const Vector3& position) const {
-  return i >= kSolePoints ? seat_window(position.x()) : 1.0;
+  return is_seat_point(i) ? seat_window(position.x()) : 1.0;
 }
 
 template <int A>
@@ -187,7 +187,7 @@ PointForceSlopes BasicContactModel<A>::force_slopes(int i, const Vector3& positi
                                                     double h) const {
   const ContactParameters& c = contact_;
   const double s = c.smoothing, eps = c.clamp_smoothing, k = c.stiffness, mu = c.friction;
-  const bool seat = i >= kSolePoints;
+  const bool seat = is_seat_point(i);
   const double gap = seat ? position.z() - c.seat_height : position.z();
   // The seat window S(x) and S'(x); 1 and 0 on the soles.
   double dscale = 0.0;
@@ -278,7 +278,7 @@ template <int A>
 VerticalLoad vertical_load(const BasicContactState<A>& state) {
   VerticalLoad load;
   for (int i = 0; i < state.count; ++i)
-    (i < kSolePoints ? load.sole : load.seat) += state.force[i].z();
+    (is_seat_point(i) ? load.seat : load.sole) += state.force[i].z();
   return load;
 }
 

@@ -76,6 +76,8 @@ constexpr int kFootPoints = 4;                // heel and toe corners, per foot
 constexpr int kSolePoints = 2 * kFootPoints;  // 8, indices 0-3 left foot, 4-7 right foot
 constexpr int kSeatPoints = 6;                // two ischia, two per thigh
 constexpr int kContactPoints = kSolePoints + kSeatPoints;
+// The seat points follow the soles; they touch the seat's surface, inside its window in x.
+constexpr bool is_seat_point(int i) { return i >= kSolePoints; }
 
 template <int A>
 using BasicPointJacobian = Eigen::Matrix<double, 3, Dimensions<A>::kDofs>;
@@ -153,7 +155,7 @@ class BasicContactModel {
   // reads z, a seat point's window x, nothing reads y. A point moved along another axis at the
   // same velocity has the same force to the last bit.
   static bool force_reads_position(int i, int axis) {
-    return axis == 2 || (axis == 0 && i >= kSolePoints);
+    return axis == 2 || (axis == 0 && is_seat_point(i));
   }
   // matrix -= h J^T D J for point i of `state` (J its Jacobian, D its force_velocity) on the
   // lower triangle, all that a Cholesky factorisation reads: the step map's implicit damping,
