@@ -1,46 +1,21 @@
 // The humanoid of common/include/hmpc/humanoid (same bodies, masses, centres of mass, inertias,
 // joint axes and gravity) built in Simbody: the reference our own dynamics is validated against,
-// and later the HIL plant. Simbody stays behind this interface (pimpl) so that only
-// simbody_humanoid.cpp needs Simbody's headers and their -UNDEBUG (Debian 12's Simbody 3.7 crashes
-// when code including its headers is built with NDEBUG and the library without it: their inline
-// code then disagrees).
+// and, on the same tree (simbody_tree.hpp), the HIL plant (hydraulic_humanoid.hpp). Simbody stays
+// behind this interface (pimpl) so that only simbody_humanoid.cpp needs Simbody's headers and their
+// -UNDEBUG (Debian 12's Simbody 3.7 crashes when code including its headers is built with NDEBUG
+// and the library without it: their inline code then disagrees).
 //
-// Coordinate mapping, ours -> Simbody (all conversions happen here; callers use ours):
-//  - Torso: MobilizedBody::Free, q = (quaternion w x y z, p) and u = (omega, v_origin), both
-//    expressed in the ground frame. Ours: q = (p, quaternion w x y z), v = (omega, v_origin) in
-//    torso coordinates. So u_base = R v_base (R torso-to-world, block-diagonal on both
-//    halves), and Simbody's udot = d/dt(R v_base) = R (a_base + (0, omega x v_o)).
-//  - Hip: MobilizedBody::Universal (first about the abduction axis, then about the rotated
-//    flexion axis) replaces our massless hip link and its two revolute joints.
-//  - Knee and ankle, and the reaching variant's shoulder: MobilizedBody::Pin with its z axis
-//    along our joint axis.
-//  - Joint coordinates are the same angles; Simbody orders q and u by tree level, so the
-//    index of each is looked up once.
-// With T the orthogonal matrix u = T v: M = T^T M_S T, c = T^T (c_S + M_S d), tau_S = T tau,
-// a = T^T (udot - d), d = (0, 0, 0, R (omega x v_o), 0...).
+// The bodies, joints, sole contact and the mapping of coordinates are simbody_tree.hpp's. With
+// T the orthogonal matrix u = T v (u_base = R v_base, R torso to world, on both halves) and
+// Simbody's udot = d/dt(R v_base) = R (a_base + (0, omega x v_o)):
+// M = T^T M_S T, c = T^T (c_S + M_S d), tau_S = T tau, a = T^T (udot - d),
+// d = (0, 0, 0, R (omega x v_o), 0...).
 //
-// Ground contact (optional, the second constructor): the 8 sole points of our ContactModel
-// (contact.hpp, the one source of their positions), each a small sphere against the ground
-// half space z < 0 in Simbody's own smooth Hunt-Crossley element SmoothSphereHalfSpaceForce
-// (in Simbody 3.7, by G. Serrancoli and A. Falisse). The laws differ in form:
-//   ours (C2)  F = k delta (1 + c delta_dot)                linear spring
-//   Simbody    F = K delta^(3/2) (1 + (3/2) c_S delta_dot)   Hertz sphere, K from E and R
-// so their parameters are mapped to agree where standing puts them (hertz_modulus in the .cpp):
-//  - stiffness: the modulus E that sinks a point by our W / (8 k) under the standing load
-//    W / 8 (Simbody's smoothing factors included), so the static pose is the same; Hertz is
-//    then about 3/2 as stiff as ours for small motions about it (dF/ddelta = 1.5 F / delta);
-//  - dissipation: c_S = c / 1.5, the same damping k delta c per point at the same load;
-//  - friction: static = dynamic = mu, transition velocity = v_s: the same Coulomb limit and
-//    the same viscous slope mu F_n / v_s below it (Simbody's friction is linear up to v_s and
-//    flat beyond it, ours saturates smoothly).
 // Reflected actuator inertia (Model::armature): Simbody has no such element, so the twin
 // mirrors the rigid bodies only and refuses a model with armature; it and whatever is compared
 // with it are built from rigid_parameters(). Our armature term is exact by construction (a
 // constant on M's diagonal, dynamics.hpp) and tested on its own.
-//
-// Simbody applies a point's force at the sphere's lowest point raised by half the penetration
-// (its source, after Sherman et al. 2011), ours at the sole point itself: 5 mm higher at the
-// standing sink, which only moves where friction acts. The chair (motion IV) is not mirrored.
+
 #pragma once
 
 #include <array>

@@ -61,7 +61,7 @@ template <typename Scalar>
 TorqueLoopGains<Scalar> tune_torque_loop(const JointActuatorParameters<Scalar>& believed,
                                          Scalar period) {
   const TorqueRateGains<Scalar> k =
-      torque_rate_gains(believed, no_load_operating_point(believed), Scalar(0));
+      torque_rate_gains(believed, no_load_operating_point(believed), believed.mid_stroke_angle);
   const Scalar pi = Scalar(3.14159265358979323846);
   const Scalar delay = period / Scalar(2) + Scalar(kIoTickSeconds) + believed.valve_time_constant;
   const Scalar crossover = (pi / Scalar(6)) / delay;
@@ -77,7 +77,7 @@ TorqueLoopGains<Scalar> tune_torque_loop(const JointActuatorParameters<Scalar>& 
 template <typename Scalar>
 Scalar no_load_velocity_ratio(const JointActuatorParameters<Scalar>& believed) {
   const TorqueRateGains<Scalar> k =
-      torque_rate_gains(believed, no_load_operating_point(believed), Scalar(0));
+      torque_rate_gains(believed, no_load_operating_point(believed), believed.mid_stroke_angle);
   return k.load_velocity / k.valve;
 }
 

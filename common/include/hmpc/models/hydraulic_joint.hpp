@@ -11,7 +11,8 @@
 //   dp_b/dt = beta / V_b(theta) (Q_b + A_b r theta')             (chamber b: rod side)
 //   tau = r (A_a p_a - A_b p_b) - r F_friction(r theta')        (joint torque)
 //
-// with x = r theta the piston's travel from mid-stroke, V_a = V_0 + A_a (s/2 + x) and
+// with x = r (theta - theta_m) the piston's travel from mid-stroke, theta_m the joint angle at
+// mid-stroke, V_a = V_0 + A_a (s/2 + x) and
 // V_b = V_0 + A_b (s/2 - x), g(dp) the orifice's signed square root, smoothed below a
 // transition pressure so that the flow is differentiable through dp = 0 (there, flow through a
 // real orifice turns laminar and linear in dp). The terms -A_a r theta' and +A_b r theta' are
@@ -48,6 +49,10 @@ struct JointActuatorParameters {
   // Lever arm of the cylinder about the joint, taken constant (the linkage's variation over
   // the joint's range is left out).
   Scalar lever = Scalar(0.035);  // m
+  // The joint angle at mid-stroke: 0 puts the stroke's middle at the joint's zero; a joint whose
+  // range is not centred on zero (a knee, 0 to 135 degrees) mounts its cylinder about the
+  // middle of its range.
+  Scalar mid_stroke_angle = Scalar(0);  // rad
   // E024: 2.5 l/min rated flow at 7 MPa valve drop, i.e. 3.5 MPa per land:
   // K = 2.5e-3 / 60 / sqrt(3.5e6).
   Scalar valve_flow_gain = Scalar(2.227e-8);  // m^3/s per sqrt(Pa) at full opening
@@ -62,7 +67,7 @@ struct JointActuatorParameters {
   Scalar viscous_friction = Scalar(200);          // N·s/m
   Scalar coulomb_smoothing_speed = Scalar(1e-3);  // m/s
 
-  // Joint range over which the piston stays inside its stroke.
+  // Joint range over which the piston stays inside its stroke: mid_stroke_angle +- this.
   Scalar theta_limit() const { return stroke / (Scalar(2) * lever); }
   // Largest torque the actuator can push at stall: supply on the piston side, return on the
   // rod side (and the mirror image for the other direction, on the smaller rod-side area).
@@ -90,6 +95,7 @@ const char* check(const JointActuatorParameters<Scalar>& p) {
   if (!positive(p.stroke) || !positive(p.dead_volume) || !positive(p.lever)) {
     return "stroke, dead volume and lever must be positive";
   }
+  if (!std::isfinite(p.mid_stroke_angle)) return "mid-stroke angle must be finite";
   if (!positive(p.valve_flow_gain) || !positive(p.valve_time_constant) ||
       !positive(p.transition_pressure)) {
     return "valve flow gain, time constant and transition pressure must be positive";
@@ -117,16 +123,16 @@ Scalar orifice_root(Scalar dp, Scalar transition_pressure) {
   return dp / std::sqrt(std::sqrt(dp * dp + transition_pressure * transition_pressure));
 }
 
-// Chamber volumes at the joint angle theta (piston at mid-stroke for theta = 0), never below
-// the dead volume: beyond the stroke the piston sits on its end cap.
+// Chamber volumes at the joint angle theta (piston at mid-stroke for theta = mid_stroke_angle),
+// never below the dead volume: beyond the stroke the piston sits on its end cap.
 template <typename Scalar>
 Scalar chamber_volume_a(const JointActuatorParameters<Scalar>& p, Scalar theta) {
-  const Scalar travel = p.stroke / Scalar(2) + p.lever * theta;
+  const Scalar travel = p.stroke / Scalar(2) + p.lever * (theta - p.mid_stroke_angle);
   return p.dead_volume + p.area_a * std::fmax(travel, Scalar(0));
 }
 template <typename Scalar>
 Scalar chamber_volume_b(const JointActuatorParameters<Scalar>& p, Scalar theta) {
-  const Scalar travel = p.stroke / Scalar(2) - p.lever * theta;
+  const Scalar travel = p.stroke / Scalar(2) - p.lever * (theta - p.mid_stroke_angle);
   return p.dead_volume + p.area_b * std::fmax(travel, Scalar(0));
 }
 
