@@ -10,6 +10,7 @@
 #include <string>
 
 #include "board_main.hpp"
+#include "humanoid_leg_board.hpp"
 #include "joint_board.hpp"
 #include "joint_options.hpp"
 
@@ -74,6 +75,15 @@ int main(int argc, char** argv) {
   config.joints = std::size_t(options.joints);
   config.control_period_ticks = int(options.control_period_ms);
   config.require_zeroing = !options.stored_offsets;
+  if (options.humanoid_leg) {
+    std::array<double, hmpc::humanoid::kJointsPerLeg> zero_posture{};
+    for (std::size_t j = 0; j < zero_posture.size(); ++j) zero_posture[j] = options.zero_posture[j];
+    hmpc::firmware::configure_humanoid_leg(config, zero_posture);
+  } else {
+    for (std::size_t j = 0; j < config.joints; ++j) {
+      config.joint[j].zero_posture = options.zero_posture[j];
+    }
+  }
   for (auto& joint : config.joint) {
     joint.actuator.bulk_modulus *= options.believed_actuator_scale;
     joint.actuator.valve_flow_gain *= options.believed_actuator_scale;
@@ -89,8 +99,9 @@ int main(int argc, char** argv) {
   static Board board(config);
   char mode_text[160];
   std::snprintf(mode_text, sizeof mode_text,
-                ", %ld joint(s), %ld ms control period, %s, believed actuator x%.2f",
-                options.joints, options.control_period_ms,
+                ", %zu joint(s)%s, %ld ms control period, %s, believed actuator x%.2f",
+                config.joints, options.humanoid_leg ? " of a humanoid leg" : "",
+                options.control_period_ms,
                 options.load_velocity_feedback ? "PID with load-velocity feedback" : "plain PID",
                 options.believed_actuator_scale);
 

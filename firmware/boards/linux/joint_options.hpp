@@ -2,6 +2,7 @@
 // once at start-up (it may allocate).
 #pragma once
 
+#include <array>
 #include <cstdio>
 #include <string>
 
@@ -19,6 +20,9 @@ struct JointOptions {
   // and valve flow gain): what a compensator tuned on a data sheet sees of a real joint.
   double believed_actuator_scale = 1;
   bool stored_offsets = false;  // trust the stored encoder offsets: hold and run without zeroing
+  // One of the humanoid's legs (humanoid_leg_board.hpp): its four joints and actuators.
+  bool humanoid_leg = false;
+  std::array<double, joint_protocol::kMaxJointsPerBoard> zero_posture{};  // rad, per channel
 };
 
 inline void print_joint_usage(std::FILE* out) {
@@ -27,7 +31,8 @@ inline void print_joint_usage(std::FILE* out) {
       "usage: hmpc-joint-board [--interface IFACE] [--io-interface IFACE] [--node N] [--lockstep]\n"
       "                        [--duration SECONDS] [--log FILE] [--joints N]\n"
       "                        [--control-period-ms 1..6] [--no-load-velocity-feedback]\n"
-      "                        [--believed-actuator-scale S] [--stored-offsets]\n");
+      "                        [--believed-actuator-scale S] [--stored-offsets]\n"
+      "                        [--humanoid-leg] [--zero-posture A,B,C,D]\n");
   print_board_options(out);
   std::fprintf(
       out,
@@ -40,6 +45,12 @@ inline void print_joint_usage(std::FILE* out) {
       "                      tune the loops for an actuator whose bulk modulus and valve flow\n"
       "                      gain are S times the nominal ones, S in [0.5, 2] (default: 1)\n"
       "  --stored-offsets    hold and run on the stored encoder offsets, without zeroing\n"
+      "  --humanoid-leg      drive one of the humanoid's legs: four joints (hip abduction, hip\n"
+      "                      flexion, knee, ankle) with the leg's actuators, torque limits and\n"
+      "                      soft limits (replaces --joints)\n"
+      "  --zero-posture A,B,C,D\n"
+      "                      each channel's angle in rad when the host zeroes the encoders\n"
+      "                      (default: 0 for each)\n"
       "On exit, and in idle and fault, the valves are centred (each joint hydraulically locked).\n"
       "Exit status: 0 on SIGINT, SIGTERM or the end of --duration; 1 when the interface or the\n"
       "log cannot be used; 2 for bad arguments.\n");
@@ -56,6 +67,21 @@ inline cli::ParseOutcome parse_joint_options(int argc, char** argv, JointOptions
   parser.number("--believed-actuator-scale", 0.5, 2, "a factor in [0.5, 2]",
                 options.believed_actuator_scale);
   parser.flag("--stored-offsets", options.stored_offsets);
+  parser.flag("--humanoid-leg", options.humanoid_leg);
+  parser.text("--zero-posture", [&options](const std::string& v) -> std::string {
+    std::size_t start = 0;
+    for (std::size_t j = 0; j < options.zero_posture.size(); ++j) {
+      const std::size_t comma = v.find(',', start);
+      const bool last = j + 1 == options.zero_posture.size();
+      if ((comma == std::string::npos) != last ||
+          !cli::parse_number(v.substr(start, last ? std::string::npos : comma - start), -3.1416,
+                             3.1416, options.zero_posture[j])) {
+        return cli::bad_value("--zero-posture", "four angles in [-pi, pi] rad, comma-separated", v);
+      }
+      start = comma + 1;
+    }
+    return {};
+  });
   const cli::ParseOutcome outcome = parser.parse(argc, argv, error);
   options.load_velocity_feedback = !no_lvf;
   return outcome;

@@ -52,6 +52,9 @@ hydraulic::JointActuatorParameters<Scalar> leg_actuator(const Parameters& parame
 // lowest bus load at the thesis's 6 ms period (joint protocol: 38 % for two boards of four).
 inline constexpr int kLegBoards = 2;
 inline constexpr int kJointsPerBoard = kJointsPerLeg;
+// The torso IMU sends its frames (joint protocol's ImuAngularVelocity, ImuLinearAcceleration)
+// under the node id after the boards'.
+inline constexpr int kImuNode = kLegBoards;
 // The model's joint index (left leg first, as q lists them) of a board's channel, and back.
 constexpr int joint_of(int board, int channel) { return board * kJointsPerLeg + channel; }
 constexpr int board_of(int joint) { return joint / kJointsPerLeg; }

@@ -48,6 +48,7 @@
 #include <array>
 
 #include "hmpc/humanoid/motion.hpp"
+#include "hmpc/humanoid/stance.hpp"
 #include "hmpc/humanoid/step.hpp"
 #include "hmpc/humanoid/thread_pool.hpp"
 #include "hmpc/solver/problem.hpp"
@@ -87,12 +88,8 @@ struct ProblemConfig {
   // 10 ms; 5 ms (omega h ~ 1) is our choice, still resolving the 5 Hz whole-body bounce.
   // (The step map's rotation guard then refines sub-steps above 40 rad/s instead of 200.)
   double max_substep = 5e-3;
-  // The base point (torso coordinates) whose height and velocity Eqs. 4.26-4.27 regulate.
-  // Choice: 7 cm above the hip joint centres, inside the pelvis (the lumbosacral joint is
-  // about 10 cm above them). The torso origin, at the hip joint centres, stands at most
-  // 0.79 m high in our de Leva model (1 cm sole sink), below Table 2.2's 0.85 m standing
-  // target; 7 cm higher, the 0.85 m target is a stance with the knees bent about 20 degrees.
-  Vector3 base_point = Vector3(0.0, 0.0, 0.07);
+  // The base point whose height and velocity Eqs. 4.26-4.27 regulate (stance.hpp says why).
+  Vector3 base_point = kBasePoint;
   Parameters parameters{};
   ContactParameters contact{};
   // The slip velocity v_s of the MPC's friction law (contact.hpp's (C3)) [m/s]; 0: the plant's.

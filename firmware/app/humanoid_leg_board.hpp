@@ -1,0 +1,38 @@
+// A joint board driving one of the humanoid's legs (hmpc/humanoid/hydraulic_legs.hpp): its four
+// joints on channels 0-3 in LegJoint order, each with the leg's actuator, the MPC's torque limit
+// for that joint, and soft limits just inside the cylinder's end caps; and the posture at which
+// the host zeroes the encoders.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+#include "hmpc/humanoid/hydraulic_legs.hpp"
+#include "joint_board.hpp"
+
+namespace hmpc::firmware {
+
+// How far past its range of motion (parameters.hpp) a joint may go before the board faults:
+// the MPC's model lets a joint press into its end stop (0.075 rad at its largest torque,
+// parameters.hpp), and the end caps stop the joint kEndCapMargin beyond the range, so the limit
+// sits between (our choice: 0.04 rad).
+inline constexpr double kLegSoftLimitMargin = 0.04;
+
+// `zero_posture`: each joint's angle [rad] when the host sends zero_encoders.
+template <typename Scalar>
+void configure_humanoid_leg(JointBoardConfig<Scalar>& config,
+                            const std::array<double, humanoid::kJointsPerLeg>& zero_posture,
+                            const humanoid::Parameters& parameters = {}) {
+  config.joints = humanoid::kJointsPerBoard;
+  for (std::size_t j = 0; j < std::size_t(humanoid::kJointsPerLeg); ++j) {
+    JointConfig<Scalar>& joint = config.joint[j];
+    joint.actuator = humanoid::leg_actuator<Scalar>(parameters, humanoid::LegJoint(j));
+    joint.theta_min = Scalar(parameters.joint_lower[j] - kLegSoftLimitMargin);
+    joint.theta_max = Scalar(parameters.joint_upper[j] + kLegSoftLimitMargin);
+    joint.torque_limit = Scalar(parameters.torque_limit[j]);
+    joint.zero_posture = Scalar(zero_posture[j]);
+  }
+  config.tune_defaults();
+}
+
+}  // namespace hmpc::firmware
