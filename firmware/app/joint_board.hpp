@@ -99,6 +99,20 @@ struct JointBoardConfig {
   // hydraulic::tune_torque_loop from the believed actuator, the hold loop a stiff posture
   // (300 N·m/rad, 1 N·m per 3.3 mrad) with damping 20 N·m·s/rad and a slow integral.
   void tune_defaults() {
+    tune_torque_loops();
+    for (auto& j : joint) {
+      j.hold_loop.kp = Scalar(300);
+      j.hold_loop.ki = Scalar(100);
+      j.hold_loop.kd = Scalar(20);
+      j.hold_loop.derivative_time_constant = Scalar(0);
+      j.hold_loop.integral_limit = Scalar(20);
+      j.hold_loop.output_min = -j.torque_limit;
+      j.hold_loop.output_max = j.torque_limit;
+      j.hold_loop.safe_output = Scalar(0);
+    }
+  }
+  // The torque loops alone, for the believed actuators as they are now.
+  void tune_torque_loops() {
     const Scalar period = Scalar(control_period_ticks) * Scalar(0.001);
     for (auto& j : joint) {
       const auto gains = hydraulic::tune_torque_loop(j.actuator, period);
@@ -109,14 +123,6 @@ struct JointBoardConfig {
       j.torque_loop.output_min = Scalar(-1);
       j.torque_loop.output_max = Scalar(1);
       j.torque_loop.safe_output = Scalar(0);
-      j.hold_loop.kp = Scalar(300);
-      j.hold_loop.ki = Scalar(100);
-      j.hold_loop.kd = Scalar(20);
-      j.hold_loop.derivative_time_constant = Scalar(0);
-      j.hold_loop.integral_limit = Scalar(20);
-      j.hold_loop.output_min = -j.torque_limit;
-      j.hold_loop.output_max = j.torque_limit;
-      j.hold_loop.safe_output = Scalar(0);
     }
   }
   JointBoardConfig() { tune_defaults(); }

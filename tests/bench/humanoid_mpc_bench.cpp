@@ -33,6 +33,7 @@
 //     Sec. 2.7.4 reports them.
 #include <benchmark/benchmark.h>
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -46,11 +47,20 @@
 #include <vector>
 
 #include "hmpc/cli/arguments.hpp"
+#include "hmpc/host/humanoid_host.hpp"
 #include "hmpc/humanoid/physical_checks.hpp"
 
 namespace {
 
 using namespace hmpc::humanoid;
+using hmpc::ComputeCostModel;
+using hmpc::LayerWork;
+
+// The element at fraction p of the sorted values.
+double percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * v.size()))];
+}
 
 Motion standing_motion() {
   return load_motion(std::string(HMPC_HUMANOID_MOTIONS) + "/I-standing.motion");
@@ -519,10 +529,6 @@ void substep_error() {
   std::vector<State> truth;
   truth.reserve(starts.size());
   for (const auto& [x, tau] : starts) truth.push_back(reference.step(x, tau, kStep));
-  const auto percentile = [](std::vector<double> v, double p) {
-    std::sort(v.begin(), v.end());
-    return v[std::min(v.size() - 1, static_cast<std::size_t>(p * v.size()))];
-  };
   std::printf(
       "\nOne 30 ms step of the MPC's model against the 1 ms simulator, from %zu closed-loop "
       "samples (standing, walking, running, low jump): median / 95th percentile\n",
@@ -557,8 +563,48 @@ void substep_error() {
 // seen, on Sec. 2.7.3's first and third tasks with its cost (hip-hold, hip-squat: the hip
 // position, the joints' rates and the change of torques), and beside them motion I and the 4 cm
 // slow squat with Sec. 4.3.1's cost.
+// Seconds per unit of work fitted by least squares to `solves` (work, measured seconds): the
+// fixed cost of an update and each layer's cost per simulated and per linearised step.
+ComputeCostModel fit_compute_model(const std::vector<std::pair<LayerWork, double>>& solves) {
+  Eigen::MatrixXd A(solves.size(), 5);
+  Eigen::VectorXd b(solves.size());
+  for (std::size_t i = 0; i < solves.size(); ++i) {
+    const LayerWork& w = solves[i].first;
+    A.row(Eigen::Index(i)) << 1.0, w.upper.rollout_steps, w.upper.derivative_steps,
+        w.fast.rollout_steps, w.fast.derivative_steps;
+    b[Eigen::Index(i)] = solves[i].second;
+  }
+  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+  ComputeCostModel m;
+  m.instructions_per_update = x[0];
+  m.upper = {x[1], x[2]};
+  m.fast = {x[3], x[4]};
+  return m;
+}
+
+// The host's compute model (hmpc/host/humanoid_host.hpp) against measured solves: the median and
+// largest relative error of its prediction, and the medians and largest of both.
+void print_model_check(const char* label, const ComputeCostModel& model,
+                       const std::vector<std::pair<LayerWork, double>>& solves) {
+  std::vector<double> errors, measured, predicted;
+  for (const auto& [work, seconds] : solves) {
+    const double p = model.seconds(work);
+    errors.push_back(std::abs(p - seconds) / seconds);
+    measured.push_back(seconds * 1e3);
+    predicted.push_back(p * 1e3);
+  }
+  std::printf(
+      "%s: relative error median %.1f %%, 90th percentile %.1f %%; median solve %.2f ms "
+      "measured, %.2f predicted; largest %.2f measured, %.2f predicted\n",
+      label, 100 * percentile(errors, 0.5), 100 * percentile(errors, 0.9),
+      percentile(measured, 0.5), percentile(predicted, 0.5),
+      *std::max_element(measured.begin(), measured.end()),
+      *std::max_element(predicted.begin(), predicted.end()));
+}
+
 void real_robot(int threads, Linearisation linearisation) {
   constexpr double kSeconds = 10.0;  // 833 solves of 12 ms
+  std::vector<std::pair<LayerWork, double>> solves;
   std::printf(
       "\nReal robot's timing (Sec. 2.7.3): Coarse-Fast, sampling 12 ms, upper 12 ms x %d, lower "
       "6 ms x %d, cap %d, tol %.0e, no warm start, untruncated, %d thread%s, %s linearisation, "
@@ -579,6 +625,9 @@ void real_robot(int threads, Linearisation linearisation) {
     config.threads = threads;
     config.problem.linearisation = linearisation;
     const ClosedLoopRun run = run_closed_loop(motion, config);
+    for (const ClosedLoopSample& sample : run.samples) {
+      solves.emplace_back(sample.work, sample.solve_seconds);
+    }
     const ClosedLoopSummary s = summarise(run);
     const PhysicalCheck check =
         check_for(file, motion, run).value().check;  // each of the four has one
@@ -597,6 +646,18 @@ void real_robot(int threads, Linearisation linearisation) {
       "torque by over %.0f %% of its limit; drift: the hip's largest horizontal distance from its "
       "start [m]; dtau: RMS change of an applied torque from one sample to the next [N m])\n",
       kLowerLayerActs * 100.0);
+  // The compute model the HIL host charges its solves with where wall time means nothing (the
+  // vcan guest): fitted to these solves, and the host's model checked against them.
+  const ComputeCostModel fitted = fit_compute_model(solves);
+  std::printf(
+      "\nCompute model of a solve, fitted to these %zu solves (seconds per unit): update %.3e, "
+      "upper rollout step %.3e, upper derivative step %.3e, lower rollout step %.3e, lower "
+      "derivative step %.3e\n",
+      solves.size(), fitted.instructions_per_update, fitted.upper.per_rollout_step,
+      fitted.upper.per_derivative_step, fitted.fast.per_rollout_step,
+      fitted.fast.per_derivative_step);
+  print_model_check("fitted model", fitted, solves);
+  print_model_check("the host's model (kHostComputeModel)", hmpc::host::kHostComputeModel, solves);
 }
 
 // Real time, repeated: a truncated run depends on when each iteration ends, so its outcome

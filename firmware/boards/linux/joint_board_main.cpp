@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
     joint.actuator.bulk_modulus *= options.believed_actuator_scale;
     joint.actuator.valve_flow_gain *= options.believed_actuator_scale;
   }
-  config.tune_defaults();
+  config.tune_torque_loops();
   if (!options.load_velocity_feedback) {
     for (auto& joint : config.joint) joint.torque_loop.load_velocity_gain = 0;
   }

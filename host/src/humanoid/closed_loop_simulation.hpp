@@ -299,6 +299,7 @@ BasicClosedLoopRun<A> simulate(Mpc& mpc, const Motion& motion, const ClosedLoopC
     const auto start = Clock::now();
     update(mpc, sample.feedback, start, sampling_period, config.truncate, times);
     sample.solve_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    sample.work = mpc.last_work();
     sample.truncated = stopped_early(mpc);
     sample.torque = mpc.planned_control(0);
     applied = mpc.planned_control(fine_steps - 1);

@@ -114,6 +114,7 @@ struct BasicClosedLoopSample {
   // instant instead catches the contact's millisecond bounces within a stance as lift-offs.
   double left_force = 0.0, right_force = 0.0, seat_force = 0.0;
   double solve_seconds = 0.0;  // wall clock of the MPC update that started the period
+  LayerWork work{};            // that update's work, by layer (the solver's counters)
   int iterations = 0;          // the (upper) layer's
   int fast_iterations = 0;     // Coarse-Fast's lower layer's
   // Coarse-Fast: how much the lower layer changed the applied inputs, the largest |nu| (Eq.
