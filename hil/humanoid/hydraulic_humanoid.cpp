@@ -195,6 +195,10 @@ struct SimbodyHydraulicHumanoid::Impl {
     }
   }
 
+  // The Simbody system holds references into itself: not to be copied.
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
   Velocity velocity() const { return tree.velocity(state); }
 
   // The sole points' contribution to D and K (generalised speeds): each sphere's Hertz

@@ -152,7 +152,7 @@ inline cli::ParseOutcome parse_options(int argc, char** argv, Options& o, std::s
   p.number("--sensor-corrupt-percent", 0, 100, "a percentage in [0, 100]", sensor_corrupt);
   p.text("--push", [&o](const std::string& v) -> std::string {
     Push push;
-    const std::string invalid = parse_push(v, push);
+    std::string invalid = parse_push(v, push);
     if (invalid.empty()) o.pushes.push_back(push);
     return invalid;
   });

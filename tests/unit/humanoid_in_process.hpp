@@ -1,0 +1,121 @@
+// The humanoid over its buses in one process, for tests: the HIL plant
+// (hil/humanoid/hydraulic_humanoid.hpp), the two leg boards (firmware/app/humanoid_leg_board.hpp)
+// and the host controller (hmpc/host/humanoid_host.hpp), every frame between them encoded and
+// decoded as on the buses, one 1 ms tick at a time as the HIL's lock-step runs them: the plant
+// sends each board its joints' readings and the IMU its 6 ms means, the boards tick, the host
+// ticks, the plant steps under the boards' valve commands. No sockets, no guest: the whole
+// chain at native speed, deterministic.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "hmpc/host/humanoid_host.hpp"
+#include "hmpc/humanoid/hydraulic_legs.hpp"
+#include "hmpc/humanoid/sensors.hpp"
+#include "hmpc/humanoid/stance.hpp"
+#include "humanoid_leg_board.hpp"
+#include "hydraulic_humanoid.hpp"
+
+namespace hmpc::test {
+
+namespace hm = hmpc::humanoid;
+namespace jp = hmpc::joint_protocol;
+
+class HumanoidInProcess {
+ public:
+  using Board = firmware::JointBoard<double>;
+
+  HumanoidInProcess(const host::HumanoidHostConfig& host_config, const hm::Motion& task,
+                    double start_height = 0.85, const hil::HumanoidMismatch& mismatch = {})
+      : start_(hm::standing_stance(hm::Parameters{}, start_height)),
+        plant_(hm::Parameters{}, hm::ContactParameters{}, mismatch, start_),
+        sensors_(plant_.model()), host_(host_config, task) {
+    for (int b = 0; b < hm::kLegBoards; ++b) {
+      Board::Config c;
+      c.node = jp::NodeId(b);
+      std::array<double, hm::kJointsPerLeg> zero{};
+      for (int j = 0; j < hm::kJointsPerLeg; ++j)
+        zero[std::size_t(j)] = start_.q[7 + hm::joint_of(b, j)];
+      firmware::configure_humanoid_leg(c, zero);
+      boards_[std::size_t(b)] = std::make_unique<Board>(c);
+    }
+    sensors_.start_at_rest(start_.q);
+    reading_ = sensors_.measure(start_.q, start_.v, hm::Velocity::Zero());
+  }
+
+  // One millisecond: the plant's readings to the boards and (every 6 ms) the IMU's to the host,
+  // the boards' tick with their frames to the host, the host's tick with its frames to the
+  // boards, then the plant's step under the valve commands.
+  void tick() {
+    const auto tau = plant_.joint_torques();
+    const auto actuators = plant_.actuators();
+    for (int b = 0; b < hm::kLegBoards; ++b) {
+      Board& board = *boards_[std::size_t(b)];
+      for (int c = 0; c < hm::kJointsPerBoard; ++c) {
+        const int j = hm::joint_of(b, c);
+        board.on_joint_sensor(std::size_t(c), reading_.angles[j], reading_.rates[j], tau[j]);
+        board.on_chamber_pressures(std::size_t(c), actuators[std::size_t(j)].pressure_a,
+                                   actuators[std::size_t(j)].pressure_b);
+      }
+    }
+    imu_angular_ += reading_.imu.angular_velocity;
+    imu_force_ += reading_.imu.specific_force;
+    if (++imu_samples_ == 6) {
+      jp::ImuAngularVelocity gyro;
+      jp::ImuLinearAcceleration accel;
+      for (int i = 0; i < 3; ++i) {
+        gyro.omega[std::size_t(i)] = float(imu_angular_[i] / 6);
+        accel.specific_force[std::size_t(i)] = float(imu_force_[i] / 6);
+      }
+      jp::Frame f;
+      if (imu_.encode(gyro, f) == jp::EncodeResult::kOk) host_.on_frame(f, tick_);
+      if (imu_.encode(accel, f) == jp::EncodeResult::kOk) host_.on_frame(f, tick_);
+      imu_angular_.setZero();
+      imu_force_.setZero();
+      imu_samples_ = 0;
+    }
+    hm::JointVector u;
+    for (int b = 0; b < hm::kLegBoards; ++b) {
+      Board& board = *boards_[std::size_t(b)];
+      board.tick();
+      jp::Frame out;
+      while (board.pop_frame(out)) host_.on_frame(out, tick_);
+      for (int c = 0; c < hm::kJointsPerBoard; ++c) {
+        u[hm::joint_of(b, c)] = board.valve_commands()[std::size_t(c)];
+      }
+    }
+    host_.tick(tick_, true, [&](const jp::Frame& f) {
+      for (auto& board : boards_) board->on_frame(f);
+    });
+    plant_.step(u);
+    const hm::BasicState<0> x = plant_.state();
+    reading_ = sensors_.measure(x.q, x.v, plant_.acceleration());
+    ++tick_;
+  }
+  void run(double seconds) {
+    const std::uint32_t end = tick_ + std::uint32_t(seconds * 1e3 + 0.5);
+    while (tick_ < end) tick();
+  }
+
+  const hm::BasicState<0>& start() const { return start_; }
+  hil::SimbodyHydraulicHumanoid& plant() { return plant_; }
+  host::HumanoidHost& host() { return host_; }
+  const Board& board(int b) const { return *boards_[std::size_t(b)]; }
+  std::uint32_t ticks() const { return tick_; }
+
+ private:
+  hm::BasicState<0> start_;
+  hil::SimbodyHydraulicHumanoid plant_;
+  hm::BipedSensors sensors_;
+  hm::SensorReadings reading_;
+  std::array<std::unique_ptr<Board>, hm::kLegBoards> boards_;
+  host::HumanoidHost host_;
+  jp::Sender imu_{jp::NodeId(hm::kImuNode)};
+  hm::Vector3 imu_angular_ = hm::Vector3::Zero(), imu_force_ = hm::Vector3::Zero();
+  int imu_samples_ = 0;
+  std::uint32_t tick_ = 0;
+};
+
+}  // namespace hmpc::test
