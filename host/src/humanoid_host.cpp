@@ -238,7 +238,7 @@ void HumanoidHost::step(std::uint32_t tick) {
 
 void HumanoidHost::solve(std::uint32_t tick) {
   Mpc& m = *mpc_;
-  const hm::BasicState<0> x = estimator_.state();
+  const hm::BasicState<0> x = solve_from_ ? *solve_from_ : estimator_.state();
   if (!x.q.allFinite() || !x.v.allFinite()) {
     to_safe("the state estimate is not finite", true);
     return;

@@ -25,6 +25,8 @@ namespace jp = hmpc::joint_protocol;
 
 class HumanoidInProcess {
  public:
+  // The IMU's frames' period (joint protocol), as the plant node sends them.
+  static constexpr int kImuPeriodTicks = 6;
   using Board = firmware::JointBoard<double>;
 
   HumanoidInProcess(const host::HumanoidHostConfig& host_config, const hm::Motion& task,
@@ -49,6 +51,7 @@ class HumanoidInProcess {
   // the boards' tick with their frames to the host, the host's tick with its frames to the
   // boards, then the plant's step under the valve commands.
   void tick() {
+    truth_ = plant_.state();
     const auto tau = plant_.joint_torques();
     const auto actuators = plant_.actuators();
     for (int b = 0; b < hm::kLegBoards; ++b) {
@@ -62,12 +65,12 @@ class HumanoidInProcess {
     }
     imu_angular_ += reading_.imu.angular_velocity;
     imu_force_ += reading_.imu.specific_force;
-    if (++imu_samples_ == 6) {
+    if (++imu_samples_ == kImuPeriodTicks) {
       jp::ImuAngularVelocity gyro;
       jp::ImuLinearAcceleration accel;
       for (int i = 0; i < 3; ++i) {
-        gyro.omega[std::size_t(i)] = float(imu_angular_[i] / 6);
-        accel.specific_force[std::size_t(i)] = float(imu_force_[i] / 6);
+        gyro.omega[std::size_t(i)] = float(imu_angular_[i] / kImuPeriodTicks);
+        accel.specific_force[std::size_t(i)] = float(imu_force_[i] / kImuPeriodTicks);
       }
       jp::Frame f;
       if (imu_.encode(gyro, f) == jp::EncodeResult::kOk) host_.on_frame(f, tick_);
@@ -94,6 +97,9 @@ class HumanoidInProcess {
     reading_ = sensors_.measure(x.q, x.v, plant_.acceleration());
     ++tick_;
   }
+  // The host's MPC solves from the plant's truth (HumanoidHost::solve_from) from now on.
+  void solve_from_truth() { host_.solve_from(&truth_); }
+
   void run(double seconds) {
     const std::uint32_t end = tick_ + std::uint32_t(seconds * 1e3 + 0.5);
     while (tick_ < end) tick();
@@ -108,6 +114,7 @@ class HumanoidInProcess {
  private:
   hm::BasicState<0> start_;
   hil::SimbodyHydraulicHumanoid plant_;
+  hm::BasicState<0> truth_;
   hm::BipedSensors sensors_;
   hm::SensorReadings reading_;
   std::array<std::unique_ptr<Board>, hm::kLegBoards> boards_;

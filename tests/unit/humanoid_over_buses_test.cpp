@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "hmpc/humanoid/motion.hpp"
+#include "hmpc/humanoid/physical_checks.hpp"
 #include "humanoid_in_process.hpp"
 
 namespace {
@@ -86,6 +88,41 @@ TEST(HumanoidOverBuses, TheMpcTakesOverFromTheBoardsHold) {
     }
   }
   EXPECT_LT(tilt(robot.plant().state()), 0.1);
+}
+
+// Sec. 2.7.3's first task, holding the hip, for the thesis's 10 s through the boards' torque
+// loops on the hydraulic plant, the MPC solving from the plant's truth: the hip check of the
+// simulated closed loop (physical_checks.hpp: within kHipHoldTolerance of where it started),
+// the torso within 0.1 rad of upright, both feet loaded. On the estimate from the bus it does
+// not yet (README, Humanoid over CAN).
+TEST(HumanoidOverBuses, HoldsTheHipForTenSecondsOnTheTruth) {
+  HumanoidInProcess robot(config(1.0), motion("hip-hold"));
+  robot.solve_from_truth();
+  robot.run(1.0);
+  while (robot.host().phase() != HostPhase::kMpc && robot.ticks() < 3000) robot.tick();
+  ASSERT_EQ(robot.host().phase(), HostPhase::kMpc);
+  const hm::BasicState<0> taken_over = robot.plant().state();
+  double drift = 0, worst_tilt = 0, least_load = 1e9;
+  for (int k = 0; k < 10000; ++k) {
+    robot.tick();
+    const hm::BasicState<0> x = robot.plant().state();
+    drift = std::max(drift, (x.q.head<2>() - taken_over.q.head<2>()).norm());
+    worst_tilt = std::max(worst_tilt, tilt(x));
+    if (k % 12 == 0) {
+      const auto f = robot.plant().sole_forces();
+      least_load = std::min({least_load, f[0].z() + f[1].z() + f[2].z() + f[3].z(),
+                             f[4].z() + f[5].z() + f[6].z() + f[7].z()});
+    }
+  }
+  std::printf(
+      "10 s of hip hold on the truth: hip drift %.4f m, tilt up to %.3f rad, least foot "
+      "load %.0f N\n",
+      drift, worst_tilt, least_load);
+  EXPECT_EQ(robot.host().phase(), HostPhase::kMpc) << robot.host().reason();
+  EXPECT_LE(drift, hm::kHipHoldTolerance);
+  EXPECT_LT(worst_tilt, 0.1);
+  // Each foot carries at least a tenth of the weight (physical_checks.hpp's loaded foot).
+  EXPECT_GT(least_load, 0.1 * robot.plant().model().total_mass() * 9.81);
 }
 
 // A solver that fails: the previous plan bridges two failures, the third in a row has the

@@ -98,6 +98,10 @@ class HumanoidHost {
   void estop();
   void hold();
   void resume_motion();
+  // Simulation only: the MPC solves from *state (the plant's truth) instead of the estimate,
+  // which still runs; nullptr restores the estimate. To tell what the estimator does to an
+  // outcome from what the rest of the chain does (as hmpc-humanoid --estimator truth).
+  void solve_from(const humanoid::BasicState<0>* state) { solve_from_ = state; }
 
   HostPhase phase() const { return phase_; }
   // Why the host is in kSafe, or why bring-up failed; empty otherwise.
@@ -137,6 +141,7 @@ class HumanoidHost {
   bool motion_paused_ = false;
   std::uint32_t motion_resumed_tick_ = 0;
   int failed_solves_ = 0;
+  const humanoid::BasicState<0>* solve_from_ = nullptr;
   std::vector<SolveRecord> solves_;
   std::uint32_t largest_delay_ = 0;
 };
