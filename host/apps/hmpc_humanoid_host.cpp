@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <random>
 #include <string>
@@ -86,8 +87,8 @@ void print_usage(std::FILE* out) {
       "                        QEMU guest) (default wall)\n"
       "  --threads N           linearisation threads, 1..8 (default 2)\n"
       "  --truncate            stop a solve at the 12 ms sampling period by wall clock\n"
-      "  --log-dir DIR         robot_bus.log and io_bus.log (candump -l), solves.csv and\n"
-      "                        estimate.csv\n"
+      "  --log-dir DIR         created if missing: robot_bus.log and io_bus.log (candump -l),\n"
+      "                        solves.csv and estimate.csv\n"
       "  --drop-percent P      share of the robot bus's frames the host loses, sent and received\n"
       "  --corrupt-at S, --corrupt-ms MS\n"
       "                        every frame the host sends in that window has a bit flipped\n"
@@ -168,6 +169,12 @@ class Program {
 
   bool open_logs(std::string& error) {
     if (o_.log_dir.empty()) return true;
+    std::error_code made;
+    std::filesystem::create_directories(o_.log_dir, made);
+    if (made) {
+      error = "cannot create the log directory '" + o_.log_dir + "': " + made.message();
+      return false;
+    }
     if (!robot_log_.open(o_.log_dir + "/robot_bus.log", error)) return false;
     if (io_ && !io_log_.open(o_.log_dir + "/io_bus.log", error)) return false;
     solves_ = hmpc::platform::open_csv_log(
