@@ -14,9 +14,10 @@ namespace hmpc::firmware {
 
 // How far past its range of motion (parameters.hpp) a joint may go before the board faults:
 // the MPC's model lets a joint press into its end stop (0.075 rad at its largest torque,
-// parameters.hpp), and the end caps stop the joint kEndCapMargin beyond the range, so the limit
-// sits between (our choice: 0.04 rad).
-inline constexpr double kLegSoftLimitMargin = 0.04;
+// parameters.hpp) and the end caps stop it kEndCapMargin (0.1 rad) beyond the range, so the
+// limit sits between. At 0.04 a board faulted on an ankle pressing into its stop as the squat
+// began (the hip squat through the boards on the plant's truth, in one process).
+inline constexpr double kLegSoftLimitMargin = 0.09;
 
 // The posture hold's stiffness [N m/rad]. The robot stands on compliant soles (contact.hpp: 1 cm
 // under its weight) whose resistance to the whole body tipping about them is about 500 N m/rad,

@@ -8,7 +8,7 @@
 // fifth to spare for regulation: 25 mm bore, 16 mm rod (A_b = 2.9 cm^2) on a 30 mm lever pulls
 // 139 N m at 16 MPa, on a 40 mm lever 186 N m (pushing 236 and 314 N m). Each cylinder is
 // mounted about the middle of its joint's range of motion (parameters.hpp) with a stroke that
-// covers the range and 0.05 rad beyond each end, where the end caps stop the joint. The valve
+// covers the range and kEndCapMargin beyond each end, where the end caps stop the joint. The valve
 // is a size up from the one-joint bench's (hydraulic_joint.hpp): 10 l/min at 7 MPa drop moves a
 // knee at 2.8 rad/s against no load with the valve fully open, the joint rates the real robot's
 // tasks (standing, squatting) and walking ask for; its bandwidth stays 250 Hz. Seal friction
@@ -22,8 +22,11 @@
 
 namespace hmpc::humanoid {
 
-// Range of motion beyond which the end caps stop the joint [rad].
-inline constexpr double kEndCapMargin = 0.05;
+// Range of motion beyond which the end caps stop the joint [rad]: beyond the 0.075 rad the MPC's
+// model lets a joint press into its end stop at its largest torque (parameters.hpp), so that the
+// plant's caps never stop a motion the MPC plans, and beyond the boards' soft limits
+// (humanoid_leg_board.hpp).
+inline constexpr double kEndCapMargin = 0.1;
 
 template <typename Scalar = double>
 hydraulic::JointActuatorParameters<Scalar> leg_actuator(const Parameters& parameters,
