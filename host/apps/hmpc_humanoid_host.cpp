@@ -66,6 +66,7 @@ void print_usage(std::FILE* out) {
       "usage: hmpc-humanoid-host [--interface IFACE] [--io-interface IFACE] [--lockstep]\n"
       "         [--duration S] [--motion NAME|FILE] [--hold-seconds S] [--paused]\n"
       "         [--resume-at S] [--solve-time wall|model] [--threads N] [--truncate]\n"
+      "         [--model-slip-velocity V]\n"
       "         [--log-dir DIR] [--drop-percent P] [--corrupt-at S] [--corrupt-ms MS]\n"
       "         [--seed N] [--estop-at S] [--fail-solver-at S] [--die-at S]\n"
       "  --interface IFACE     the robot bus (default vcan0)\n"
@@ -87,6 +88,9 @@ void print_usage(std::FILE* out) {
       "                        QEMU guest) (default wall)\n"
       "  --threads N           linearisation threads, 1..8 (default 2)\n"
       "  --truncate            stop a solve at the 12 ms sampling period by wall clock\n"
+      "  --model-slip-velocity V\n"
+      "                        the slip velocity of the MPC's friction law [m/s], 0.001..1\n"
+      "                        (default: the plant's contact's, 0.01)\n"
       "  --log-dir DIR         created if missing: robot_bus.log and io_bus.log (candump -l),\n"
       "                        solves.csv and estimate.csv\n"
       "  --drop-percent P      share of the robot bus's frames the host loses, sent and received\n"
@@ -126,6 +130,8 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   });
   p.integer("--threads", 1, 8, o.host.threads);
   p.flag("--truncate", o.host.truncate);
+  p.number("--model-slip-velocity", 0.001, 1.0, "m/s in 0.001..1",
+           o.host.problem.model_slip_velocity);
   p.text("--log-dir", [&o](const std::string& v) -> std::string {
     if (v.empty()) return "--log-dir needs a directory";
     o.log_dir = v;

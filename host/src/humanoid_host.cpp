@@ -70,9 +70,9 @@ struct HumanoidHost::Mpc {
   bool running = false;  // the boards asked for run
 
   Mpc(int threads, const hm::Motion& motion, const hm::BasicState<0>& start,
-      const hm::CoarseFastTiming& timing)
+      const hm::ProblemConfig& problem, const hm::CoarseFastTiming& timing)
       : pool(threads), solver(hm::make_coarse_fast<0>(motion, start, threads > 1 ? &pool : nullptr,
-                                                      hm::ProblemConfig{}, 0, timing)) {}
+                                                      problem, 0, timing)) {}
 };
 
 HumanoidHost::HumanoidHost(const HumanoidHostConfig& config, const hm::Motion& task)
@@ -202,7 +202,8 @@ void HumanoidHost::step(std::uint32_t tick) {
       break;
     case HostPhase::kHolding:
       if (in_phase >= ticks_of(config_.hold_seconds) && estimator_started_) {
-        mpc_ = std::make_unique<Mpc>(config_.threads, task_, estimator_.state(), config_.timing);
+        mpc_ = std::make_unique<Mpc>(config_.threads, task_, estimator_.state(), config_.problem,
+                                     config_.timing);
         mpc_start_tick_ = tick;
         enter(HostPhase::kMpc);
         solve(tick);

@@ -33,6 +33,7 @@
 #include "hmpc/estimation/biped_state_estimator.hpp"
 #include "hmpc/host/humanoid_can_master.hpp"
 #include "hmpc/humanoid/coarse_fast.hpp"
+#include "hmpc/humanoid/problem.hpp"
 #include "hmpc/mpc/compute_model.hpp"
 
 namespace hmpc::host {
@@ -54,6 +55,9 @@ struct HumanoidHostConfig {
   double hold_seconds = 10;       // under the boards' PID before the MPC (Sec. 2.7.3)
   double rest_seconds = 0.5;      // of the hold, the estimator's start (ClosedLoopConfig's)
   humanoid::CoarseFastTiming timing = humanoid::kRealRobotTiming;
+  // The MPC's model settings (its step is the timing's); e.g. its friction's slip velocity
+  // (ProblemConfig::model_slip_velocity, the lever State estimation measured).
+  humanoid::ProblemConfig problem{};
   int threads = 2;
   bool truncate = false;  // stop a solve at the sampling period by wall clock (real time)
   SolveTime solve_time = SolveTime::kWall;
