@@ -136,12 +136,6 @@ class HydraulicLegs : public SimTK::Force::Custom::Implementation {
   mutable SimTK::DiscreteVariableIndex command_;
 };
 
-// d g / d dp of hydraulic::orifice_root: (dp^2 / 2 + p_t^2) / (dp^2 + p_t^2)^(5/4).
-double orifice_slope(double dp, double transition_pressure) {
-  const double s = dp * dp + transition_pressure * transition_pressure;
-  return (0.5 * dp * dp + transition_pressure * transition_pressure) / std::pow(s, 1.25);
-}
-
 // One chamber's pressure after h with its inflow q(p) and piston term: dp/dt = beta / V (q(p) -
 // displacement), stepped implicitly in p through q's slope (the orifice is stiff near a closed
 // land: beta / V K g' reaches 1e4 /s at the dead volume).
@@ -259,9 +253,7 @@ struct SimbodyHydraulicHumanoid::Impl {
       const int u = tree.joint_u[j];
       const double theta = legs->angle(state, j), rate = legs->rate(state, j);
       const double piston = a.lever * rate;
-      const double sech = 1.0 / std::cosh(piston / a.coulomb_smoothing_speed);
-      const double friction_slope =
-          a.coulomb_friction / a.coulomb_smoothing_speed * sech * sech + a.viscous_friction;
+      const double friction_slope = hy::piston_friction_slope(a, piston);
       damping(u, u) +=
           -a.lever * a.lever * friction_slope + h * hy::load_velocity_coupling(a, theta);
       const double beyond = std::max(theta - (a.mid_stroke_angle + a.theta_limit()),
@@ -281,10 +273,12 @@ struct SimbodyHydraulicHumanoid::Impl {
       const hy::JointActuatorState<double> d = hy::derivative(a, x, theta, rate, commands[j]);
       const double k = a.valve_flow_gain * x.spool, pt = a.transition_pressure;
       // d(flow into a)/dp_a and d(flow into b)/dp_b, on the side of the spool's opening.
-      const double slope_a = x.spool >= 0 ? -k * orifice_slope(a.supply_pressure - x.pressure_a, pt)
-                                          : k * orifice_slope(x.pressure_a - a.return_pressure, pt);
-      const double slope_b = x.spool >= 0 ? -k * orifice_slope(x.pressure_b - a.return_pressure, pt)
-                                          : k * orifice_slope(a.supply_pressure - x.pressure_b, pt);
+      const double slope_a = x.spool >= 0
+                                 ? -k * hy::orifice_root_slope(a.supply_pressure - x.pressure_a, pt)
+                                 : k * hy::orifice_root_slope(x.pressure_a - a.return_pressure, pt);
+      const double slope_b = x.spool >= 0
+                                 ? -k * hy::orifice_root_slope(x.pressure_b - a.return_pressure, pt)
+                                 : k * hy::orifice_root_slope(a.supply_pressure - x.pressure_b, pt);
       x.pressure_a = step_pressure(x.pressure_a, d.pressure_a,
                                    a.bulk_modulus / hy::chamber_volume_a(a, theta) * slope_a, h);
       x.pressure_b = step_pressure(x.pressure_b, d.pressure_b,

@@ -81,6 +81,29 @@ TEST(HydraulicJointValve, OrificeIsTheSquareRootLawAwayFromZeroAndSmoothThroughI
               1e-6 / std::sqrt(pt));
 }
 
+// The slopes an implicit integrator steps with (the HIL plant's): the orifice root's and the
+// seal friction's, each its function's central difference to 1e-6 of itself, through the
+// transition region and beyond it.
+TEST(HydraulicJointValve, SlopesAreTheDerivativesOfTheirLaws) {
+  const Parameters p;
+  for (const double dp : {-5e6, -3e5, -1e4, 0.0, 2e4, 2e5, 8e6}) {
+    const double h = 1.0;  // Pa
+    const double difference = (hy::orifice_root(dp + h, p.transition_pressure) -
+                               hy::orifice_root(dp - h, p.transition_pressure)) /
+                              (2 * h);
+    EXPECT_NEAR(hy::orifice_root_slope(dp, p.transition_pressure), difference,
+                1e-6 * std::abs(difference))
+        << "dp " << dp;
+  }
+  for (const double v : {-0.1, -1e-3, 0.0, 5e-4, 0.02}) {
+    const double h = 1e-7;  // m/s
+    const double difference =
+        (hy::piston_friction(p, v + h) - hy::piston_friction(p, v - h)) / (2 * h);
+    EXPECT_NEAR(hy::piston_friction_slope(p, v), difference, 1e-6 * std::abs(difference))
+        << "v " << v;
+  }
+}
+
 TEST(HydraulicJointValve, SpoolIsAFirstOrderLagOnTheClampedCommand) {
   const Parameters p;
   const State s{0.2, 8e6, 8e6};

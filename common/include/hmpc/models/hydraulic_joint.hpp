@@ -123,6 +123,14 @@ Scalar orifice_root(Scalar dp, Scalar transition_pressure) {
   return dp / std::sqrt(std::sqrt(dp * dp + transition_pressure * transition_pressure));
 }
 
+// d g / d dp of orifice_root: (dp^2 / 2 + p_t^2) / (dp^2 + p_t^2)^(5/4).
+template <typename Scalar>
+Scalar orifice_root_slope(Scalar dp, Scalar transition_pressure) {
+  const Scalar s = dp * dp + transition_pressure * transition_pressure;
+  return (Scalar(0.5) * dp * dp + transition_pressure * transition_pressure) /
+         std::pow(s, Scalar(1.25));
+}
+
 // Chamber volumes at the joint angle theta (piston at mid-stroke for theta = mid_stroke_angle),
 // never below the dead volume: beyond the stroke the piston sits on its end cap.
 template <typename Scalar>
@@ -159,6 +167,13 @@ ValveFlows<Scalar> valve_flows(const JointActuatorParameters<Scalar>& p,
 template <typename Scalar>
 Scalar piston_friction(const JointActuatorParameters<Scalar>& p, Scalar v) {
   return p.coulomb_friction * std::tanh(v / p.coulomb_smoothing_speed) + p.viscous_friction * v;
+}
+
+// d F_friction / dv of piston_friction at piston speed v (N·s/m).
+template <typename Scalar>
+Scalar piston_friction_slope(const JointActuatorParameters<Scalar>& p, Scalar v) {
+  const Scalar sech = Scalar(1) / std::cosh(v / p.coulomb_smoothing_speed);
+  return p.coulomb_friction / p.coulomb_smoothing_speed * sech * sech + p.viscous_friction;
 }
 
 // Joint torque (N·m) the actuator applies at joint velocity theta_dot.
