@@ -52,6 +52,24 @@ constexpr auto kStartTimeout = 30s;
 // Hold gains the host sends first (the board's defaults), exercising the Gains frame over CAN.
 constexpr proto::Gains kHoldGains{10.0f, 10.0f, 2.0f, 0.0f, 0};
 
+// The arm over 1 ms under Eq. 3.1, resting on its mechanical end stops as the real elbow does:
+// a board that goes safe on a stall of this shared machine vents the muscle, and without the
+// stops the falling arm would leave the sensor frame's range (+-pi) and the rig, not the
+// board, would fail.
+Eigen::Vector3d step_arm(const hmpc::forearm::Parameters<double>& params, const Eigen::Vector3d& x,
+                         const proto::ActuatorCommand& command) {
+  Eigen::Vector3d next =
+      hmpc::forearm::integrate(params, x, Eigen::Vector2d(command.v_m, command.v_p), 1e-3);
+  if (next(0) < params.stop_lower) {
+    next(0) = params.stop_lower;
+    next(1) = std::max(next(1), 0.0);
+  } else if (next(0) > params.stop_upper) {
+    next(0) = params.stop_upper;
+    next(1) = std::min(next(1), 0.0);
+  }
+  return next;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -208,7 +226,7 @@ class BusRig {
     send(encode(plant_, proto::SensorSample{float(x_(0)), float(x_(1)), float(x_(2) / 10), 0}));
     send(encode(plant_, proto::Sync{std::uint32_t(steps_), 0}));
     ASSERT_TRUE(await_actuator_command()) << "no ActuatorCommand for Sync " << steps_;
-    x_ = hmpc::forearm::integrate(params_, x_, Eigen::Vector2d(command_.v_m, command_.v_p), 1e-3);
+    x_ = step_arm(params_, x_, command_);
     ++steps_;
   }
   void run(int ticks, Heartbeat heartbeat = Heartbeat::kOn) {
@@ -468,7 +486,7 @@ TEST(ForearmBoardRealTime, RunsItsTimerAndReportsOverruns) {
         fault_bits |= status.faults;
       }
     }
-    x = hmpc::forearm::integrate(params, x, Eigen::Vector2d(applied.v_m, applied.v_p), 1e-3);
+    x = step_arm(params, x, applied);
     next.tv_nsec += 1'000'000;
     if (next.tv_nsec >= 1'000'000'000) {
       next.tv_nsec -= 1'000'000'000;
