@@ -330,6 +330,57 @@ TEST(InvariantEkf, LevelSolesAtRestRevealTheAccelerometersOffset) {
   EXPECT_GT(tilt(filter), 0.9 * hidden);
 }
 
+// A rest that is not still: held by its joints' controllers a robot sags, and here its hips
+// turn the torso forward at 4 mrad/s on feet that stay flat and fixed (what the hydraulic legs
+// did under the boards' hold). The gyroscope's mean over the rest is then its bias plus that
+// rate; the legs' angles at the rest's start and end tell the rate, so the filter started
+// with them finds the bias to within the rest's noise, and without them is off by the rate.
+TEST(InvariantEkf, ARestThatTurnsTheTorsoStillGivesTheGyroscopeBias) {
+  constexpr double kRate = 0.004;  // rad/s of hip flexion, both legs
+  constexpr int kSamples = 500;
+  const State start = standing_state(ProblemConfig{}, 0.80);
+  const Model model{Parameters{}};
+  Dynamics dynamics(model);
+  Dynamics::Kinematics kinematics;
+  const int sole = Model::body_of(0, kAnkle);
+  // The torso's attitude on the fixed left sole: R = R_fit(0) R_fit(t)^T (R_fit: the sole in
+  // torso coordinates), upright at the start.
+  auto angles_at = [&](int k) {
+    JointVector a = start.q.tail<kJoints>();
+    a[kHipFlexion] += kRate * kDt * k;
+    a[kJointsPerLeg + kHipFlexion] += kRate * kDt * k;
+    return a;
+  };
+  auto sole_in_torso = [&](const JointVector& a) {
+    Configuration q;
+    q << 0, 0, 0, 1, 0, 0, 0, a;
+    dynamics.kinematics(q, Velocity::Zero(), kinematics);
+    return Matrix3(kinematics.rotation[sole]);
+  };
+  const Matrix3 at_start = sole_in_torso(angles_at(0));
+  sensors::ImuModel imu{sensors::bmi088(kDt), 5};
+  est::ImuRest rest;
+  Matrix3 torso = Matrix3::Identity();
+  for (int k = 0; k < kSamples; ++k) {
+    const Matrix3 next = at_start * sole_in_torso(angles_at(k + 1)).transpose();
+    const Eigen::AngleAxisd turned(torso.transpose() * next);
+    rest.add(imu.measure({turned.angle() * turned.axis() / kDt,
+                          torso.transpose() * Vector3(0, 0, 9.81)}),
+             kDt);
+    torso = next;
+  }
+  const Vector3 bias = imu.gyroscope_bias();
+  est::InvariantEkf filter;
+  filter.initialize_at_rest(rest, angles_at(0), angles_at(kSamples - 1), kDt * (kSamples - 1));
+  // The gyroscope bias's y in the error (phi, v, p, d_L, d_R, b_g, b_a): index 16.
+  const double sigma = std::sqrt(filter.covariance()(16, 16));
+  EXPECT_LT(std::abs(filter.estimate().gyroscope_bias.y() - bias.y()), 3 * sigma);
+  EXPECT_LT(3 * sigma, 0.5 * kRate);  // the test tells the two apart
+  est::InvariantEkf unaided;
+  unaided.initialize_at_rest(rest, angles_at(kSamples - 1));
+  EXPECT_GT(std::abs(unaided.estimate().gyroscope_bias.y() - bias.y()), 0.5 * kRate);
+}
+
 bool finite(const est::BaseEstimate& e) {
   return e.position.allFinite() && e.orientation.coeffs().allFinite() && e.velocity.allFinite() &&
          e.angular_velocity.allFinite() && e.gyroscope_bias.allFinite() &&

@@ -145,14 +145,43 @@ void InvariantEkf::correct_with_level_soles() {
 }
 
 void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles) {
+  initialize_at_rest(rest, joint_angles, joint_angles, 0.0);
+}
+
+Vector3 InvariantEkf::turn_on_the_feet(const JointVector& from, const JointVector& to) {
+  // With a sole fixed in the world, R_torso = R_sole R_fit^T (R_fit: the sole in torso
+  // coordinates, from the legs), so the torso turned by R_fit(from) R_fit(to)^T, in its
+  // coordinates at `from`; the mean of the two soles' rotation vectors.
+  std::array<Matrix3, kFeet> before{};
+  leg_kinematics(from, JointVector::Zero());
+  for (int foot = 0; foot < kFeet; ++foot) {
+    before[foot] = kinematics_.rotation[Model::body_of(foot, humanoid::kAnkle)];
+  }
+  leg_kinematics(to, JointVector::Zero());
+  Vector3 turn = Vector3::Zero();
+  for (int foot = 0; foot < kFeet; ++foot) {
+    const Eigen::AngleAxisd turned(before[foot] *
+                                   kinematics_.rotation[Model::body_of(foot, humanoid::kAnkle)]
+                                       .transpose());
+    turn += turned.angle() * turned.axis() / kFeet;
+  }
+  return turn;
+}
+
+void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& angles_at_start,
+                                      const JointVector& joint_angles, double span) {
   const double g = model_.gravity.norm();
-  const Vector3 force = rest.mean_specific_force();
+  // The torso's mean rate over the rest, from the legs (zero for a rest without a span), and
+  // the mean force turned into the rest's last attitude: the mean stands for the middle one,
+  // half the turn before it.
+  const Vector3 turn = span > 0 ? turn_on_the_feet(angles_at_start, joint_angles) : Vector3::Zero();
+  const Vector3 force = exp_so3(-0.5 * turn) * rest.mean_specific_force();
   // At rest the accelerometer reads R^T (0, 0, g) + b_a: its direction gives roll and pitch
   // (a horizontal bias tilts it, unobservably), its magnitude less g the bias along gravity.
   const Vector3 up = force.normalized();
   rotation_ = Eigen::Quaterniond::FromTwoVectors(up, Vector3::UnitZ()).toRotationMatrix();
   accelerometer_bias_ = (force.norm() - g) * up;
-  gyroscope_bias_ = rest.mean_angular_velocity();
+  gyroscope_bias_ = rest.mean_angular_velocity() - (span > 0 ? Vector3(turn / span) : Vector3::Zero());
   velocity_.setZero();
   last_rate_.setZero();
   leg_kinematics(joint_angles, JointVector::Zero());
@@ -259,7 +288,6 @@ void InvariantEkf::integrate(const Vector3& w, const Vector3& a, double dt) {
   const auto& accel = config_.imu.accelerometer;
   const double qg = gyro.noise_density * gyro.noise_density;
   const double qa = accel.noise_density * accel.noise_density;
-  const double qc = config_.stance_foot_noise * config_.stance_foot_noise;
   Covariance q = Covariance::Zero();
   const Matrix3 rrt_g = qg * Matrix3::Identity();  // R Qg R^T, isotropic
   const std::array<Vector3, 5> columns = {Vector3::Zero(), v, p, stance_point_[0],
@@ -274,7 +302,9 @@ void InvariantEkf::integrate(const Vector3& w, const Vector3& a, double dt) {
   }
   q.block<3, 3>(kV, kV) += qa * Matrix3::Identity();
   for (int foot = 0; foot < kFeet; ++foot) {
-    q.block<3, 3>(kd(foot), kd(foot)) += qc * Matrix3::Identity();
+    const double noise = support_[foot] == kFlat ? config_.flat_stance_foot_noise
+                                                 : config_.stance_foot_noise;
+    q.block<3, 3>(kd(foot), kd(foot)) += noise * noise * Matrix3::Identity();
   }
   q.block<3, 3>(kBg, kBg) = gyro.bias_random_walk * gyro.bias_random_walk * Matrix3::Identity();
   q.block<3, 3>(kBa, kBa) = accel.bias_random_walk * accel.bias_random_walk * Matrix3::Identity();

@@ -18,11 +18,18 @@ class BipedStateEstimator {
 
   // A reading `dt` after the last while the robot is held still, before start().
   void rest(const humanoid::SensorReadings& reading, double dt) {
+    if (rest_.samples == 0) {
+      rest_start_angles_ = reading.angles;
+      rest_span_ = 0;
+    } else {
+      rest_span_ += dt;
+    }
     rest_.add(reading.imu, dt);
     last_ = reading;
   }
-  // Starts the filter from the rest so far (at least one reading).
-  void start() { filter_.initialize_at_rest(rest_, last_.angles); }
+  // Starts the filter from the rest so far (at least one reading), with what the legs say of
+  // the torso's turning meanwhile.
+  void start() { filter_.initialize_at_rest(rest_, rest_start_angles_, last_.angles, rest_span_); }
 
   // A reading `dt` after the last, once started.
   void update(const humanoid::SensorReadings& reading, double dt) {
@@ -48,6 +55,8 @@ class BipedStateEstimator {
  private:
   InvariantEkf filter_;
   ImuRest rest_;
+  humanoid::JointVector rest_start_angles_ = humanoid::JointVector::Zero();
+  double rest_span_ = 0;  // from the rest's first reading to its last [s]
   humanoid::SensorReadings last_;
 };
 

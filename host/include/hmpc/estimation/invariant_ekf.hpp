@@ -49,6 +49,14 @@ struct InvariantEkfConfig {
   // Cassie's point feet) left walking's horizontal velocity error at 0.16 m/s RMS, 0.01 at
   // 0.015 m/s; 0.005 let the jump's tilt error grow to 1.5 degrees.
   double stance_foot_noise = 0.01;
+  // The same for a sole bearing on all four corners (flat): it does not rock, and standing it
+  // carries little tangential load, so mostly the creep is left: 5 mm/s near half the friction
+  // limit (contact.hpp's law). Choice: 0.005, measured. On the humanoid over its buses (the
+  // hydraulic plant, the MPC holding the hip on this estimate) at 0.01 a 0.015 m/s velocity
+  // error from the MPC's take-over decayed only over seconds and the robot, rocking onto a
+  // heel, fell within 3 s; at 0.005 it held. At 0.002 one seed of the standing closed loop
+  // on the estimate fell (its height estimate off by 2 cm).
+  double flat_stance_foot_noise = 0.005;
   // Leg kinematics' error [m] per axis: link lengths, joint play, the contact wandering
   // within its support. Choice: 5 mm.
   double kinematics_noise = 0.005;
@@ -163,6 +171,14 @@ class InvariantEkf {
   // position zero (unobservable); height from the legs. Feet on the ground are the stance
   // points. The rest must hold at least one sample.
   void initialize_at_rest(const ImuRest& rest, const JointVector& joint_angles);
+  // The same for a rest that was not quite still: a robot held by its joints' controllers sags
+  // and turns a little while the rest is taken (on the hydraulic legs under the boards' hold,
+  // ~3.7 mrad/s of pitch: taken for the gyroscope's bias it tilted the estimate by 0.01 rad
+  // within 3 s). The soles flat and fixed, the legs' angles at the rest's first reading and
+  // at its last, `span` [s] later, tell how the torso turned; its mean rate is the gyroscope
+  // mean's share that is not bias.
+  void initialize_at_rest(const ImuRest& rest, const JointVector& angles_at_start,
+                          const JointVector& joint_angles, double span);
 
   // One IMU sample, dt after the last (bad readings and intervals: InvariantEkfConfig).
   void propagate(const sensors::ImuReading& imu, double dt);
@@ -191,6 +207,9 @@ class InvariantEkf {
   std::uint8_t support_corners(int foot) const;
   Vector3 mean_of_corners(int foot, std::uint8_t mask, Vector3* velocity) const;
   void anchor_swing_foot(int foot);
+  // How the torso turned [rad, rotation vector in its coordinates at `from`] while the legs
+  // went from `from` to `to` with both soles fixed in the world.
+  Vector3 turn_on_the_feet(const JointVector& from, const JointVector& to);
   // One step of the IMU's process model with bias-corrected rate w and force a.
   void integrate(const Vector3& w, const Vector3& a, double dt);
   // The Kalman update with z = H xi + noise (covariance n; X_true = exp(xi) X): rows of an
