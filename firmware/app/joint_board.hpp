@@ -83,13 +83,19 @@ struct JointBoardConfig {
   joint_proto::NodeId node = 0;
   std::size_t joints = joint_proto::kMaxJointsPerBoard;             // 1..4
   int control_period_ticks = joint_proto::kDefaultControlPeriodMs;  // 6 ms, or 1..5
-  // ModeCommand comes every 10 ms: 30 ms (two lost in a row, five 6 ms control periods) trips.
+  // ModeCommand comes every 10 ms: 70 ms (six lost in a row) trips. Choice: a robot bus that
+  // loses a tenth of its frames (the fault the humanoid rides through) loses k in a row with
+  // probability 0.1^k, so a timeout of two lost (30 ms) tripped a board within seconds and
+  // six lose one every ~3 hours per board; a dead host's boards still stop acting on its
+  // torques within the reference timeout below, holding their posture until this one
+  // centres their valves.
   int heartbeat_timeout_ticks =
-      3 * joint_proto::frame_spec(joint_proto::FrameType::kModeCommand).cycle_time_ms;
+      7 * joint_proto::frame_spec(joint_proto::FrameType::kModeCommand).cycle_time_ms;
   // Sensors come every 1 ms: five lost in a row are a sensor fault.
   int sensor_timeout_ticks = 5;
-  // Torque references come every control period: three periods without one are stale.
-  int reference_timeout_periods = 3;
+  // Torque references come every control period: four periods without one (three lost in a
+  // row, once a minute per board at a tenth lost) are stale.
+  int reference_timeout_periods = 4;
   // Hold and run need encoders zeroed since boot (a board that trusts its stored offsets, e.g.
   // with absolute encoders calibrated in the factory, sets this false).
   bool require_zeroing = true;

@@ -145,6 +145,7 @@ void HumanoidHost::resume_motion() {
 
 void HumanoidHost::to_safe(const char* reason, bool hold_posture) {
   phase_ = HostPhase::kSafe;
+  safe_tick_ = last_tick_;
   reason_ = reason;
   master_.stop_references();
   master_.request(hold_posture ? jp::RequestedMode::kHold : jp::RequestedMode::kIdle);
@@ -165,6 +166,24 @@ void HumanoidHost::step(std::uint32_t tick) {
     phase_tick_ = tick;
   };
   const auto timed_out = [&] { return in_phase > ticks_of(config_.bring_up_timeout_s); };
+  // Once the robot stands on its boards: whatever of it falls silent or restarts, the boards
+  // still heard hold their posture (a silent board's valves are centred by its own watchdog
+  // or its valve driver). Before a board's fault, which has every board go idle: a restarted
+  // board faults for the hold it is asked, and the others should still hold.
+  if (phase_ == HostPhase::kHolding || phase_ == HostPhase::kMpc) {
+    if (!master_.boards_present()) {
+      to_safe("a leg board fell silent", true);
+      return;
+    }
+    if (master_.any_restarted()) {
+      to_safe("a leg board restarted: its encoders are not zeroed", true);
+      return;
+    }
+    if (!master_.readings().imu_heard) {
+      to_safe("the IMU fell silent", true);
+      return;
+    }
+  }
   if (phase_ != HostPhase::kSafe && phase_ != HostPhase::kWaiting && master_.any_fault()) {
     to_safe("a board reports a fault", false);
     return;

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <memory>
+#include <random>
 #include <vector>
 
 #include "hmpc/host/humanoid_host.hpp"
@@ -35,7 +36,7 @@ class HumanoidInProcess {
         plant_(hm::Parameters{}, hm::ContactParameters{}, mismatch, start_),
         sensors_(plant_.model()), host_(host_config, task) {
     for (int b = 0; b < hm::kLegBoards; ++b) {
-      Board::Config c;
+      Board::Config& c = board_config_[std::size_t(b)];
       c.node = jp::NodeId(b);
       std::array<double, hm::kJointsPerLeg> zero{};
       for (int j = 0; j < hm::kJointsPerLeg; ++j)
@@ -73,8 +74,8 @@ class HumanoidInProcess {
         accel.specific_force[std::size_t(i)] = float(imu_force_[i] / kImuPeriodTicks);
       }
       jp::Frame f;
-      if (imu_.encode(gyro, f) == jp::EncodeResult::kOk) host_.on_frame(f, tick_);
-      if (imu_.encode(accel, f) == jp::EncodeResult::kOk) host_.on_frame(f, tick_);
+      if (!imu_silent_ && imu_.encode(gyro, f) == jp::EncodeResult::kOk) to_host(f);
+      if (!imu_silent_ && imu_.encode(accel, f) == jp::EncodeResult::kOk) to_host(f);
       imu_angular_.setZero();
       imu_force_.setZero();
       imu_samples_ = 0;
@@ -82,21 +83,50 @@ class HumanoidInProcess {
     hm::JointVector u;
     for (int b = 0; b < hm::kLegBoards; ++b) {
       Board& board = *boards_[std::size_t(b)];
+      // A dead board sends nothing; its valve driver centres its valves.
+      if (dead_[std::size_t(b)]) {
+        for (int c = 0; c < hm::kJointsPerBoard; ++c) u[hm::joint_of(b, c)] = 0;
+        continue;
+      }
       board.tick();
       jp::Frame out;
-      while (board.pop_frame(out)) host_.on_frame(out, tick_);
+      while (board.pop_frame(out)) to_host(out);
       for (int c = 0; c < hm::kJointsPerBoard; ++c) {
         u[hm::joint_of(b, c)] = board.valve_commands()[std::size_t(c)];
       }
     }
-    host_.tick(tick_, true, [&](const jp::Frame& f) {
-      for (auto& board : boards_) board->on_frame(f);
-    });
+    if (!host_dead_) {
+      host_.tick(tick_, true, [&](const jp::Frame& sent) {
+        jp::Frame f = sent;
+        if (!through_robot_bus(f)) return;
+        for (int b = 0; b < hm::kLegBoards; ++b) {
+          if (!dead_[std::size_t(b)]) boards_[std::size_t(b)]->on_frame(f);
+        }
+      });
+    }
     plant_.step(u);
     const hm::BasicState<0> x = plant_.state();
     reading_ = sensors_.measure(x.q, x.v, plant_.acceleration());
     ++tick_;
   }
+  // Faults. The IMU stops sending; board b dies (sends nothing, takes nothing, its valves
+  // centred) or restarts (a fresh board: idle, its encoders not zeroed); the host dies (no
+  // tick, no frame); of the robot bus's frames, `percent` are lost (seeded) or, until tick
+  // `until`, every one is corrupted (a data byte flipped).
+  void silence_imu() { imu_silent_ = true; }
+  void kill_board(int b) { dead_[std::size_t(b)] = true; }
+  void restart_board(int b) {
+    boards_[std::size_t(b)] = std::make_unique<Board>(board_config_[std::size_t(b)]);
+  }
+  void kill_host() { host_dead_ = true; }
+  void lose_frames(double percent, std::uint64_t seed) {
+    loss_ = percent / 100;
+    random_.seed(seed);
+  }
+  void corrupt_frames_until(std::uint32_t until) { corrupt_until_ = until; }
+  std::uint64_t lost_frames() const { return lost_frames_; }
+  std::uint64_t robot_bus_frames() const { return robot_bus_frames_; }
+
   // The host's MPC solves from the plant's truth (HumanoidHost::solve_from) from now on.
   void solve_from_truth() { host_.solve_from(&truth_); }
 
@@ -112,12 +142,35 @@ class HumanoidInProcess {
   std::uint32_t ticks() const { return tick_; }
 
  private:
+  // A robot-bus frame on its way, lost or corrupted as the faults say; false: lost.
+  bool through_robot_bus(jp::Frame& f) {
+    ++robot_bus_frames_;
+    if (loss_ > 0 && uniform_(random_) < loss_) {
+      ++lost_frames_;
+      return false;
+    }
+    if (tick_ < corrupt_until_ && f.dlc > 0) f.data[f.dlc - 1] ^= 0x5A;
+    return true;
+  }
+  void to_host(const jp::Frame& sent) {
+    jp::Frame f = sent;
+    if (!host_dead_ && through_robot_bus(f)) host_.on_frame(f, tick_);
+  }
+
   hm::BasicState<0> start_;
   hil::SimbodyHydraulicHumanoid plant_;
   hm::BasicState<0> truth_;
   hm::BipedSensors sensors_;
   hm::SensorReadings reading_;
+  std::array<Board::Config, hm::kLegBoards> board_config_{};
   std::array<std::unique_ptr<Board>, hm::kLegBoards> boards_;
+  std::array<bool, hm::kLegBoards> dead_{};
+  bool imu_silent_ = false, host_dead_ = false;
+  double loss_ = 0;
+  std::uint32_t corrupt_until_ = 0;
+  std::uint64_t lost_frames_ = 0, robot_bus_frames_ = 0;
+  std::mt19937_64 random_{1};
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   host::HumanoidHost host_;
   jp::Sender imu_{jp::NodeId(hm::kImuNode)};
   hm::Vector3 imu_angular_ = hm::Vector3::Zero(), imu_force_ = hm::Vector3::Zero();

@@ -42,6 +42,11 @@ struct LegBoardView {
   std::array<bool, jp::kMaxJointsPerBoard> zeroed{};
   std::array<float, jp::kMaxJointsPerBoard> offset{};  // rad, as reported
   std::uint32_t joint_frames = 0, status_frames = 0;
+  // Seen in hold or run; then found idle or booting while the host asks for hold or run, or
+  // faulted for being asked them before zeroing, it has restarted: its encoders are no longer
+  // zeroed, so it will not hold or run (its valves centred).
+  bool engaged = false;
+  bool restarted = false;
 };
 
 // What the boards and the IMU said last.
@@ -133,6 +138,7 @@ class HumanoidCanMaster {
     switch (type) {
       case jp::FrameType::kBoardStatus:
         if (rx.decode(frame, board.status) != jp::DecodeResult::kOk) return Heard::kNothing;
+        note_mode(board);
         board.heard = true;
         board.last_status_tick = tick;
         ++board.status_frames;
@@ -172,6 +178,12 @@ class HumanoidCanMaster {
     }
     return true;
   }
+  bool any_restarted() const {
+    for (const LegBoardView& b : boards_) {
+      if (b.restarted) return true;
+    }
+    return false;
+  }
   bool any_fault() const {
     for (const LegBoardView& b : boards_) {
       if (b.heard && b.status.mode == jp::BoardMode::kFault) return true;
@@ -188,6 +200,7 @@ class HumanoidCanMaster {
     return true;
   }
 
+  const HumanoidMasterConfig& config() const { return config_; }
   const LegBoardView& board(int b) const { return boards_[std::size_t(b)]; }
   const RobotReadings& readings() const { return readings_; }
   jp::RequestedMode requested_mode() const { return mode_; }
@@ -205,6 +218,7 @@ class HumanoidCanMaster {
       if (board.heard &&
           tick - board.last_status_tick > std::uint32_t(config_.board_timeout_ticks)) {
         board.heard = false;
+        board.engaged = false;
         board.zeroed.fill(false);
         from_board_[std::size_t(b)].counters = {};
       }
@@ -213,6 +227,19 @@ class HumanoidCanMaster {
     if (readings_.imu_heard && tick - last_imu > std::uint32_t(config_.imu_timeout_ticks)) {
       readings_.imu_heard = false;
       imu_receiver_.counters = {};
+    }
+  }
+
+  void note_mode(LegBoardView& board) const {
+    const jp::BoardMode mode = board.status.mode;
+    if (mode == jp::BoardMode::kHold || mode == jp::BoardMode::kRun) {
+      board.engaged = true;
+    } else if (board.engaged &&
+               (mode == jp::BoardMode::kBoot || mode == jp::BoardMode::kIdle ||
+                (mode == jp::BoardMode::kFault && board.status.faults == jp::fault::kNotZeroed)) &&
+               (mode_ == jp::RequestedMode::kHold || mode_ == jp::RequestedMode::kRun)) {
+      board.restarted = true;
+      board.engaged = false;
     }
   }
 

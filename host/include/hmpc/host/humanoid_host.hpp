@@ -110,6 +110,8 @@ class HumanoidHost {
   HostPhase phase() const { return phase_; }
   // Why the host is in kSafe, or why bring-up failed; empty otherwise.
   const std::string& reason() const { return reason_; }
+  // The tick the host went to its safe phase (valid once it has).
+  std::uint32_t safe_tick() const { return safe_tick_; }
   bool bring_up_failed() const { return bring_up_failed_; }
   const HumanoidCanMaster& master() const { return master_; }
   const estimation::BipedStateEstimator& estimator() const { return estimator_; }
@@ -137,6 +139,7 @@ class HumanoidHost {
   std::string reason_;
   bool bring_up_failed_ = false;
   std::uint32_t phase_tick_ = 0;  // when the phase began
+  std::uint32_t safe_tick_ = 0;
   std::uint32_t last_tick_ = 0;
   bool estimator_started_ = false;
   std::uint32_t last_imu_tick_ = 0;
