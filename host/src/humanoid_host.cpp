@@ -280,6 +280,7 @@ void HumanoidHost::solve(std::uint32_t tick) {
   }
   SolveRecord record;
   record.tick = tick;
+  record.estimate_tick = last_imu_tick_;
   record.wall_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   record.charged_ms = config_.solve_time == SolveTime::kWall
                           ? record.wall_ms

@@ -14,91 +14,28 @@
 #include <string>
 #include <vector>
 
-#include "hmpc/humanoid/hydraulic_legs.hpp"
-#include "hmpc/humanoid/stance.hpp"
 #include "hmpc/platform/linux/candump_log.hpp"
 #include "hmpc/platform/linux/child_process.hpp"
+#include "humanoid_hil_run.hpp"
 
 namespace {
 
-namespace hm = hmpc::humanoid;
-using hmpc::platform::Child;
-using Summary = std::map<std::string, std::string>;
-
-// Lock-step runs take what the guest needs for the plant, the boards and the host's solves:
-// about 15 s per simulated second in a QEMU guest without KVM, twice that as a margin.
-constexpr double kWallPerSimulatedS = 30;
+using hmpc::hil::HumanoidHilFigures;
+using hmpc::hil::HumanoidHilRun;
+using hmpc::hil::Summary;
 
 double number(const Summary& s, const std::string& key) {
   const auto it = s.find(key);
   return it == s.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
 }
 
-struct HilRun {
-  bool ok = false;
-  std::string error, dir;
-  Summary plant, host;
-  std::vector<Summary> boards;
-};
-
-// The boards zero their encoders in the plant's starting stance.
-std::string zero_posture(int board) {
-  const hm::BasicState<0> start = hm::standing_stance(hm::Parameters{}, 0.85);
-  std::string out;
-  for (int c = 0; c < hm::kJointsPerBoard; ++c) {
-    out += (c ? "," : "") + std::to_string(start.q[7 + hm::joint_of(board, c)]);
-  }
-  return out;
-}
-
-HilRun run(const std::string& name, std::vector<std::string> host_args, double duration_s) {
-  HilRun r;
+HumanoidHilRun run(const std::string& name, double hold_seconds, double duration_s) {
+  hmpc::hil::HumanoidHilConfig config;
   const char* tmp = std::getenv("TMPDIR");
-  r.dir = std::string(tmp ? tmp : "/tmp") + "/hmpc-humanoid-hil-test/" + name + "/";
-  std::filesystem::remove_all(r.dir);
-  std::filesystem::create_directories(r.dir);
-  std::vector<Child> boards(hm::kLegBoards);
-  for (int b = 0; b < hm::kLegBoards; ++b) {
-    const std::vector<std::string> args{
-        "--lockstep", "--interface",     "vcan0",          "--io-interface", "vcan1",
-        "--node",     std::to_string(b), "--humanoid-leg", "--zero-posture", zero_posture(b)};
-    if (!boards[std::size_t(b)].start(HMPC_JOINT_BOARD_PROGRAM, args,
-                                      r.dir + "board" + std::to_string(b) + ".out", r.error) ||
-        !boards[std::size_t(b)].await_output(": ready", 30)) {
-      r.error = "board " + std::to_string(b) + " did not start: " + r.error;
-      return r;
-    }
-  }
-  host_args.insert(host_args.begin(),
-                   {"--lockstep", "--io-interface", "vcan1", "--duration",
-                    std::to_string(duration_s), "--solve-time", "model", "--log-dir", r.dir});
-  Child host, plant;
-  if (!host.start(HMPC_HUMANOID_HOST_PROGRAM, host_args, r.dir + "host.out", r.error) ||
-      !host.await_output(": ready", 60)) {
-    r.error = "the host did not start: " + r.error + host.errors();
-    return r;
-  }
-  if (!plant.start(HMPC_HUMANOID_PLANT_PROGRAM,
-                   {"--lockstep", "--wait-host", "--duration", std::to_string(duration_s), "--log",
-                    r.dir + "plant.csv"},
-                   r.dir + "plant.out", r.error)) {
-    return r;
-  }
-  const int plant_status = plant.wait(60 + kWallPerSimulatedS * duration_s);
-  const int host_status = host.wait(60);
-  int board_status = 0;
-  for (Child& b : boards) board_status |= b.stop(10);
-  r.plant = hmpc::platform::parse_summary(plant.output());
-  r.host = hmpc::platform::parse_summary(host.output());
-  for (const Child& b : boards) r.boards.push_back(hmpc::platform::parse_summary(b.output()));
-  if (plant_status != 0 || host_status != 0 || board_status != 0) {
-    r.error = "exit status plant " + std::to_string(plant_status) + ", host " +
-              std::to_string(host_status) + ", boards " + std::to_string(board_status) +
-              "; plant said: " + plant.errors() + " host said: " + host.errors();
-    return r;
-  }
-  r.ok = true;
-  return r;
+  config.dir = std::string(tmp ? tmp : "/tmp") + "/hmpc-humanoid-hil-test/" + name;
+  config.seconds = duration_s;
+  config.hold_seconds = hold_seconds;
+  return hmpc::hil::run_humanoid_hil(config);
 }
 
 // Bring-up, 1 s of the boards' hold, then the MPC (hip-hold) on the estimate from the bus until
@@ -107,7 +44,7 @@ HilRun run(const std::string& name, std::vector<std::string> host_args, double d
 // logged.
 TEST(HumanoidHil, BringsUpHoldsAndHandsOverToTheMpcOverCan) {
   constexpr double kSeconds = 2.0;
-  const HilRun r = run("hold-then-mpc", {"--hold-seconds", "1.0"}, kSeconds);
+  const HumanoidHilRun r = run("hold-then-mpc", 1.0, kSeconds);
   ASSERT_TRUE(r.ok) << r.error;
   std::printf(
       "plant: %.1f s simulated in %.1f s of wall time; lowest torso %.3f m, tilt up to "
@@ -162,6 +99,38 @@ TEST(HumanoidHil, BringsUpHoldsAndHandsOverToTheMpcOverCan) {
   EXPECT_GT(ids[0x221], 0.9 * (kSeconds - mpc_start) / 0.006);
   const std::string io_log = hmpc::platform::read_file(r.dir + "io_bus.log");
   EXPECT_NE(io_log.find(" vcan1 081#"), std::string::npos);
+
+  // The runner's figures (hmpc-humanoid-hil prints them): every solve after the take-over
+  // counted; the estimate within the estimator's targets (1 cm, 0.05 m/s, 1 degree) of the
+  // truth; each bus as loaded as its periodic frames make it, to within the frames of the
+  // start (the boards and the IMU are heard from the start, the references only under the
+  // MPC); a plan's torques on the bus at least a tick after the IMU reading its estimate
+  // took, at most the IMU's period (6 ticks), its charged compute time and the wait for the
+  // references' next slot (5 ticks) later.
+  HumanoidHilFigures f;
+  std::string error;
+  ASSERT_TRUE(hmpc::hil::figures_of(r, f, error)) << error;
+  std::printf(
+      "figures: %d solves, largest %.2f ms, %.1f %% over 12 ms; estimate RMS %.1f mm, %.3f m/s, "
+      "%.2f deg; bus load robot %.1f %% (design %.1f %%), I/O %.1f %% (%.1f %%); sensor to "
+      "torque %d..%d ticks; lock-step %.3f x real time\n",
+      f.solves, f.largest_solve_ms, 100 * f.share_over_period, 1e3 * f.height_rms,
+      f.horizontal_velocity_rms, f.tilt_rms * 180 / M_PI, 100 * f.robot_bus_load,
+      100 * f.robot_bus_design_load, 100 * f.io_bus_load, 100 * f.io_bus_design_load,
+      f.latency_min, f.latency_max, f.lockstep_speed);
+  EXPECT_EQ(f.solves, int(number(r.host, "solves")));
+  EXPECT_NEAR(f.mpc_start_s, mpc_start, 0.007);
+  EXPECT_LT(f.height_rms, 0.01);
+  EXPECT_LT(f.horizontal_velocity_rms, 0.05);
+  EXPECT_LT(f.tilt_rms, M_PI / 180);
+  EXPECT_GT(f.robot_bus_load, 0.7 * f.robot_bus_design_load);
+  EXPECT_LT(f.robot_bus_load, 1.05 * f.robot_bus_design_load);
+  EXPECT_GT(f.io_bus_load, 0.9 * f.io_bus_design_load);
+  EXPECT_LT(f.io_bus_load, 1.05 * f.io_bus_design_load);
+  EXPECT_GE(f.latency_min, 1);
+  EXPECT_LE(f.latency_max, 6 + int(std::ceil(f.largest_solve_ms)) + 5);
+  EXPECT_NEAR(f.lockstep_speed, number(r.plant, "sim_seconds") / number(r.plant, "wall_seconds"),
+              1e-9);
 }
 
 }  // namespace

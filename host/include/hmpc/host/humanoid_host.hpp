@@ -70,6 +70,7 @@ struct HumanoidHostConfig {
 // One solve, as logged.
 struct SolveRecord {
   std::uint32_t tick = 0;            // started at
+  std::uint32_t estimate_tick = 0;   // the IMU reading its estimate took last came at
   std::uint32_t effective_tick = 0;  // its plan took effect at
   double wall_ms = 0, charged_ms = 0;
   int upper_iterations = 0, fast_iterations = 0;
