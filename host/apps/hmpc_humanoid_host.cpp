@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <random>
 #include <string>
@@ -24,6 +25,7 @@
 
 #include "hmpc/cli/arguments.hpp"
 #include "hmpc/host/humanoid_host.hpp"
+#include "hmpc/host/humanoid_replay.hpp"
 #include "hmpc/humanoid/motion.hpp"
 #include "hmpc/platform/linux/bus_program.hpp"
 #include "hmpc/platform/linux/candump_log.hpp"
@@ -58,6 +60,7 @@ struct Options {
   double corrupt_at_s = -1, corrupt_s = 0.05;  // a burst of corrupted frames sent
   double estop_at_s = -1;
   double die_at_s = -1;
+  std::string replay;  // a lock-step run's robot bus log to replay, offline
 };
 
 void print_usage(std::FILE* out) {
@@ -66,7 +69,7 @@ void print_usage(std::FILE* out) {
       "usage: hmpc-humanoid-host [--interface IFACE] [--io-interface IFACE] [--lockstep]\n"
       "         [--duration S] [--motion NAME|FILE] [--hold-seconds S] [--paused]\n"
       "         [--resume-at S] [--solve-time wall|model] [--threads N] [--truncate]\n"
-      "         [--model-slip-velocity V]\n"
+      "         [--model-slip-velocity V] [--replay FILE]\n"
       "         [--log-dir DIR] [--drop-percent P] [--corrupt-at S] [--corrupt-ms MS]\n"
       "         [--seed N] [--estop-at S] [--fail-solver-at S] [--die-at S]\n"
       "  --interface IFACE     the robot bus (default vcan0)\n"
@@ -100,8 +103,13 @@ void print_usage(std::FILE* out) {
       "  --estop-at S          the host sends the bus-wide E-stop at S\n"
       "  --fail-solver-at S    test hook: every solve from S on counts as failed\n"
       "  --die-at S            test hook: SIGKILL to itself at S\n"
+      "  --replay FILE         offline: a lock-step run's robot_bus.log into the host, on the\n"
+      "                        ticks it came, each frame the host sends compared with the run's;\n"
+      "                        give the run's options (motion, hold, paused, resume, slip\n"
+      "                        velocity); plans charged by the model (the run's must have been)\n"
       "Exit status: 0 at the end of --duration or on SIGINT/SIGTERM; 1 when a bus or a log\n"
-      "fails; 2 for bad arguments; 3 when the robot could not be brought up.\n");
+      "fails; 2 for bad arguments; 3 when the robot could not be brought up; 4 when a replay\n"
+      "differs from its run.\n");
 }
 
 hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& error) {
@@ -147,12 +155,19 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
   p.number("--fail-solver-at", 0, hmpc::cli::kMaxDurationS, "seconds in [0, 1e6]",
            o.host.fail_solver_at_s);
   p.number("--die-at", 0, hmpc::cli::kMaxDurationS, "seconds in [0, 1e6]", o.die_at_s);
+  p.text("--replay", [&o](const std::string& v) -> std::string {
+    if (v.empty()) return "--replay needs a log file";
+    o.replay = v;
+    return {};
+  });
   const auto outcome = p.parse(argc, argv, error);
   if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
   if (o.lockstep && o.io_interface.empty()) {
     error = "--lockstep needs --io-interface (the plant's Sync frames are the host's clock)";
     return hmpc::cli::ParseOutcome::kError;
   }
+  // A replay is exact only with the plans charged by the model, which the log alone decides.
+  if (!o.replay.empty()) o.host.solve_time = hmpc::host::SolveTime::kModel;
   if (o.resume_at_s >= 0 && !o.host.motion_paused) {
     error = "--resume-at goes with --paused";
     return hmpc::cli::ParseOutcome::kError;
@@ -411,6 +426,39 @@ End run(const Options& o, Program& program, HumanoidHost& host, SocketCan& robot
 
 }  // namespace
 
+// --replay: the run's robot bus log into `host`, the run's program hooks on their ticks.
+int replay(const Options& o, HumanoidHost& host) {
+  std::ifstream log(o.replay);
+  if (!log) {
+    std::fprintf(stderr, "%s: cannot read %s\n", kProgram, o.replay.c_str());
+    return 1;
+  }
+  bool estop_sent = false;
+  const auto hooks = [&](std::uint32_t tick) {
+    const double t = 1e-3 * double(tick);
+    if (o.estop_at_s >= 0 && !estop_sent && t >= o.estop_at_s) {
+      host.estop();
+      estop_sent = true;
+    }
+    if (o.resume_at_s >= 0 && t >= o.resume_at_s) host.resume_motion();
+  };
+  hmpc::host::ReplayReport r;
+  std::string error;
+  if (!hmpc::host::replay_lockstep_log(log, host, r, error, hooks)) {
+    std::fprintf(stderr, "%s: %s: %s\n", kProgram, o.replay.c_str(), error.c_str());
+    return 1;
+  }
+  std::printf(
+      "%s: summary replay ticks=%u heard=%llu sent=%llu run_sent=%llu mismatches=%llu "
+      "first_mismatch_tick=%u first_mismatch=\"%s\" skipped_lines=%llu phase=%s solves=%zu\n",
+      kProgram, r.ticks, static_cast<unsigned long long>(r.heard),
+      static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.logged_sent),
+      static_cast<unsigned long long>(r.mismatches), r.first_mismatch_tick,
+      r.first_mismatch.c_str(), static_cast<unsigned long long>(r.skipped_lines),
+      hmpc::host::name_of(host.phase()), host.solves().size());
+  return r.mismatches == 0 ? 0 : 4;
+}
+
 int main(int argc, char** argv) {
   Options options;
   std::string error;
@@ -432,6 +480,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
     return 2;
   }
+  if (!options.replay.empty()) return replay(options, *host);
   // The robot bus: every frame (the boards' and the IMU's); the I/O bus: only listened to.
   SocketCan robot, io;
   for (auto [can, name] :
