@@ -167,9 +167,9 @@ TEST(HumanoidFaults, ARestartedBoardStopsTheMpcAndTheOtherHolds) {
               robot.host().safe_tick() - restarted, reason.c_str());
 }
 
-// A burst of corrupted frames on the robot bus (every frame for 20 ms, a data byte flipped):
+// A burst of corrupted frames on the robot bus (every frame for 15 ms, a data byte flipped):
 // every one is rejected by its receiver's checksum and counted, none is acted on; the boards'
-// watchdogs (heartbeat 30 ms, references three 6 ms periods) outlast the burst, so the MPC
+// watchdogs (heartbeat 70 ms, references four 6 ms periods) outlast the burst, so the MPC
 // rides through.
 TEST(HumanoidFaults, ABurstOfCorruptedFramesIsRejectedAndRiddenThrough) {
   HumanoidInProcess robot(config(), hip_hold());
