@@ -292,9 +292,9 @@ class Program {
     const auto& solves = host_.solves();
     for (; solves_ && logged_solves_ < solves.size(); ++logged_solves_) {
       const hmpc::host::SolveRecord& r = solves[logged_solves_];
-      std::fprintf(solves_, "%u,%.3f,%.3f,%.3f,%u,%d,%d,%d,%u\n", r.tick, r.motion_time,
-                   r.wall_ms, r.charged_ms, r.effective_tick, r.upper_iterations,
-                   r.fast_iterations, r.usable ? 1 : 0, r.estimate_tick);
+      std::fprintf(solves_, "%u,%.3f,%.3f,%.3f,%u,%d,%d,%d,%u\n", r.tick, r.motion_time, r.wall_ms,
+                   r.charged_ms, r.effective_tick, r.upper_iterations, r.fast_iterations,
+                   r.usable ? 1 : 0, r.estimate_tick);
     }
     if (!estimate_ || tick % 6 != 0) return;
     const hm::BasicState<0> x = host_.estimator().state();

@@ -22,8 +22,7 @@ struct Logged {
 bool sent_by_host(const jp::Frame& f) {
   jp::FrameType type{};
   jp::NodeId node = 0;
-  return jp::identify(f.id, type, node) &&
-         jp::frame_spec(type).sender == protocol::Endpoint::kHost;
+  return jp::identify(f.id, type, node) && jp::frame_spec(type).sender == protocol::Endpoint::kHost;
 }
 
 std::string describe(const jp::Frame& f) {

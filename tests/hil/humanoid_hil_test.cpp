@@ -120,8 +120,8 @@ TEST(HumanoidHil, BringsUpHoldsAndRunsTheMpcOnTheEstimateOverCan) {
       "torque %d..%d ticks; lock-step %.3f x real time\n",
       f.solves, f.largest_solve_ms, 100 * f.share_over_period, 1e3 * f.height_rms,
       f.horizontal_velocity_rms, f.tilt_rms * 180 / M_PI, 100 * f.robot_bus_load,
-      100 * f.robot_bus_design_load, 100 * f.io_bus_load, 100 * f.io_bus_design_load,
-      f.latency_min, f.latency_max, f.lockstep_speed);
+      100 * f.robot_bus_design_load, 100 * f.io_bus_load, 100 * f.io_bus_design_load, f.latency_min,
+      f.latency_max, f.lockstep_speed);
   std::printf("hip hold: the hip within %.1f mm of where the MPC took over, tilt up to %.3f rad\n",
               1e3 * f.hip_drift, f.max_tilt);
   EXPECT_EQ(f.solves, int(number(r.host, "solves")));
@@ -155,8 +155,8 @@ TEST(HumanoidHil, BringsUpHoldsAndRunsTheMpcOnTheEstimateOverCan) {
               static_cast<unsigned long long>(replay.sent),
               static_cast<unsigned long long>(replay.logged_sent),
               static_cast<unsigned long long>(replay.mismatches));
-  EXPECT_EQ(replay.mismatches, 0u) << replay.first_mismatch << " at tick "
-                                   << replay.first_mismatch_tick;
+  EXPECT_EQ(replay.mismatches, 0u)
+      << replay.first_mismatch << " at tick " << replay.first_mismatch_tick;
   EXPECT_EQ(replay.sent, replay.logged_sent);
   EXPECT_EQ(double(replayed.solves().size()), number(r.host, "solves"));
   EXPECT_NEAR(f.lockstep_speed, number(r.plant, "sim_seconds") / number(r.plant, "wall_seconds"),

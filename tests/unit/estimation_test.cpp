@@ -364,8 +364,8 @@ TEST(InvariantEkf, ARestThatTurnsTheTorsoStillGivesTheGyroscopeBias) {
   for (int k = 0; k < kSamples; ++k) {
     const Matrix3 next = at_start * sole_in_torso(angles_at(k + 1)).transpose();
     const Eigen::AngleAxisd turned(torso.transpose() * next);
-    rest.add(imu.measure({turned.angle() * turned.axis() / kDt,
-                          torso.transpose() * Vector3(0, 0, 9.81)}),
+    rest.add(imu.measure(
+                 {turned.angle() * turned.axis() / kDt, torso.transpose() * Vector3(0, 0, 9.81)}),
              kDt);
     torso = next;
   }

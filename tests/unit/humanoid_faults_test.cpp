@@ -73,9 +73,9 @@ TEST(HumanoidFaults, TheHostDyingHasEveryBoardHoldThenCentreItsValves) {
   EXPECT_LE(held, std::uint32_t(stale + board.control_period_ticks + 1));
   EXPECT_GE(held + std::uint32_t(board.control_period_ticks), std::uint32_t(stale));
   const std::uint32_t safe = held + ticks_until(robot, 200, [&] {
-    return robot.board(0).mode() == jp::BoardMode::kFault &&
-           robot.board(1).mode() == jp::BoardMode::kFault;
-  });
+                               return robot.board(0).mode() == jp::BoardMode::kFault &&
+                                      robot.board(1).mode() == jp::BoardMode::kFault;
+                             });
   std::printf(
       "host killed: both boards hold after %u ticks (references stale after %d), safe after %u "
       "(heartbeat timeout %d); tilt %.3f rad\n",

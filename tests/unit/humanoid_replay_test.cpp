@@ -2,13 +2,14 @@
 // a host's own run replays with every sent frame the same; a frame changed or missing in the
 // log is found on its tick; a log that is not one is refused. (A whole run over vcan, frames
 // heard included, replays bit for bit in humanoid_over_can.)
+#include "hmpc/host/humanoid_replay.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <sstream>
 #include <string>
 
-#include "hmpc/host/humanoid_replay.hpp"
 #include "hmpc/humanoid/motion.hpp"
 
 namespace {

@@ -98,11 +98,17 @@ HumanoidHilRun run_humanoid_hil(const HumanoidHilConfig& config) {
       return r;
     }
   }
-  std::vector<std::string> host_args{"--lockstep",     "--io-interface", "vcan1",
-                                     "--duration",     std::to_string(config.seconds),
-                                     "--hold-seconds", std::to_string(config.hold_seconds),
-                                     "--solve-time",   "model",
-                                     "--log-dir",      r.dir};
+  std::vector<std::string> host_args{"--lockstep",
+                                     "--io-interface",
+                                     "vcan1",
+                                     "--duration",
+                                     std::to_string(config.seconds),
+                                     "--hold-seconds",
+                                     std::to_string(config.hold_seconds),
+                                     "--solve-time",
+                                     "model",
+                                     "--log-dir",
+                                     r.dir};
   host_args.insert(host_args.end(), config.host_args.begin(), config.host_args.end());
   Child host, plant;
   if (!host.start(HMPC_HUMANOID_HOST_PROGRAM, host_args, r.dir + "host.out", r.error) ||
@@ -158,8 +164,8 @@ bool figures_of(const HumanoidHilRun& run, HumanoidHilFigures& out, std::string&
     over += charged > period_ms ? 1 : 0;
     const auto effective = std::uint32_t(number(s, 4)), from = std::uint32_t(number(s, 8));
     // The host sends references on the ticks that are multiples of their period.
-    const std::uint32_t sent = (effective + reference_period - 1) / reference_period *
-                               reference_period;
+    const std::uint32_t sent =
+        (effective + reference_period - 1) / reference_period * reference_period;
     latency.push_back(int(sent - from));
   }
   out.share_over_period = double(over) / out.solves;

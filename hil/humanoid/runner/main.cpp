@@ -58,8 +58,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   config.host_args = {"--motion", motion};
-  std::printf("humanoid over CAN: %s, %.1f s simulated, %.1f s of the boards' hold first; logs in %s\n",
-              motion.c_str(), config.seconds, config.hold_seconds, config.dir.c_str());
+  std::printf(
+      "humanoid over CAN: %s, %.1f s simulated, %.1f s of the boards' hold first; logs in %s\n",
+      motion.c_str(), config.seconds, config.hold_seconds, config.dir.c_str());
   std::fflush(stdout);
   const hmpc::hil::HumanoidHilRun run = hmpc::hil::run_humanoid_hil(config);
   if (!run.ok) {
@@ -85,8 +86,8 @@ int main(int argc, char** argv) {
       "%.1f %% (%.1f %%) | %d..%d ticks, median %.0f | %.3f x real time |\n",
       f.solves, f.largest_solve_ms, 100 * f.share_over_period, 1e3 * f.height_rms,
       f.horizontal_velocity_rms, f.tilt_rms * 180 / 3.14159265358979, 100 * f.robot_bus_load,
-      100 * f.robot_bus_design_load, 100 * f.io_bus_load, 100 * f.io_bus_design_load,
-      f.latency_min, f.latency_max, f.latency_median, f.lockstep_speed);
+      100 * f.robot_bus_design_load, 100 * f.io_bus_load, 100 * f.io_bus_design_load, f.latency_min,
+      f.latency_max, f.latency_median, f.lockstep_speed);
   const std::string reason = at(run.host, "reason");
   std::printf(
       "the MPC took over at %.3f s; from then on the hip (base point) within %.1f mm of where it "

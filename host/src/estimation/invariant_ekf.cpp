@@ -160,9 +160,8 @@ Vector3 InvariantEkf::turn_on_the_feet(const JointVector& from, const JointVecto
   leg_kinematics(to, JointVector::Zero());
   Vector3 turn = Vector3::Zero();
   for (int foot = 0; foot < kFeet; ++foot) {
-    const Eigen::AngleAxisd turned(before[foot] *
-                                   kinematics_.rotation[Model::body_of(foot, humanoid::kAnkle)]
-                                       .transpose());
+    const Eigen::AngleAxisd turned(
+        before[foot] * kinematics_.rotation[Model::body_of(foot, humanoid::kAnkle)].transpose());
     turn += turned.angle() * turned.axis() / kFeet;
   }
   return turn;
@@ -181,7 +180,8 @@ void InvariantEkf::initialize_at_rest(const ImuRest& rest, const JointVector& an
   const Vector3 up = force.normalized();
   rotation_ = Eigen::Quaterniond::FromTwoVectors(up, Vector3::UnitZ()).toRotationMatrix();
   accelerometer_bias_ = (force.norm() - g) * up;
-  gyroscope_bias_ = rest.mean_angular_velocity() - (span > 0 ? Vector3(turn / span) : Vector3::Zero());
+  gyroscope_bias_ =
+      rest.mean_angular_velocity() - (span > 0 ? Vector3(turn / span) : Vector3::Zero());
   velocity_.setZero();
   last_rate_.setZero();
   leg_kinematics(joint_angles, JointVector::Zero());
@@ -302,8 +302,8 @@ void InvariantEkf::integrate(const Vector3& w, const Vector3& a, double dt) {
   }
   q.block<3, 3>(kV, kV) += qa * Matrix3::Identity();
   for (int foot = 0; foot < kFeet; ++foot) {
-    const double noise = support_[foot] == kFlat ? config_.flat_stance_foot_noise
-                                                 : config_.stance_foot_noise;
+    const double noise =
+        support_[foot] == kFlat ? config_.flat_stance_foot_noise : config_.stance_foot_noise;
     q.block<3, 3>(kd(foot), kd(foot)) += noise * noise * Matrix3::Identity();
   }
   q.block<3, 3>(kBg, kBg) = gyro.bias_random_walk * gyro.bias_random_walk * Matrix3::Identity();

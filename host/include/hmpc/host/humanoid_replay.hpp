@@ -25,7 +25,7 @@ struct ReplayReport {
   std::uint64_t logged_sent = 0;      // frames it sent in the run
   std::uint64_t mismatches = 0;       // sent frames that differ from the run's, or are missing
   std::uint32_t first_mismatch_tick = 0;
-  std::string first_mismatch;  // what differed first
+  std::string first_mismatch;       // what differed first
   std::uint64_t skipped_lines = 0;  // not a candump line, or not a protocol frame
 };
 
