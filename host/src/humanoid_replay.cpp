@@ -1,7 +1,6 @@
 #include "hmpc/host/humanoid_replay.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <vector>
 
 #include "hmpc/platform/linux/candump_log.hpp"
@@ -26,9 +25,8 @@ bool sent_by_host(const jp::Frame& f) {
 }
 
 std::string describe(const jp::Frame& f) {
-  char text[64];
-  int n = std::snprintf(text, sizeof text, "%03X#", unsigned(f.id));
-  for (int i = 0; i < f.dlc && n < 60; ++i) n += std::snprintf(text + n, 4, "%02X", f.data[i]);
+  char text[32];
+  platform::format_candump_frame(platform::to_can_frame(f), text);
   return text;
 }
 
@@ -71,9 +69,10 @@ bool replay_lockstep_log(std::istream& log, HumanoidHost& host, ReplayReport& re
     return false;
   }
   std::size_t next = 0;
+  std::vector<const jp::Frame*> expected;  // the run's frames of one tick
   for (std::uint32_t tick = 0; tick <= lines.back().tick; ++tick) {
     // What the host heard before this tick, then the tick; the run's frames of this tick.
-    std::vector<const jp::Frame*> expected;
+    expected.clear();
     for (; next < lines.size() && lines[next].tick == tick; ++next) {
       if (lines[next].sent) {
         expected.push_back(&lines[next].frame);

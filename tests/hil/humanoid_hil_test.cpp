@@ -27,10 +27,7 @@ using hmpc::hil::HumanoidHilFigures;
 using hmpc::hil::HumanoidHilRun;
 using hmpc::hil::Summary;
 
-double number(const Summary& s, const std::string& key) {
-  const auto it = s.find(key);
-  return it == s.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
-}
+using hmpc::platform::summary_number;
 
 HumanoidHilRun run(const std::string& name, double hold_seconds, double duration_s) {
   hmpc::hil::HumanoidHilConfig config;
@@ -53,13 +50,14 @@ TEST(HumanoidHil, BringsUpHoldsAndRunsTheMpcOnTheEstimateOverCan) {
   std::printf(
       "plant: %.1f s simulated in %.1f s of wall time; lowest torso %.3f m, tilt up to "
       "%.3f rad; host: %g solves, largest charged %.2f ms, largest delay %g ticks\n",
-      number(r.plant, "sim_seconds"), number(r.plant, "wall_seconds"),
-      number(r.plant, "min_height"), number(r.plant, "max_tilt"), number(r.host, "solves"),
-      number(r.host, "largest_solve_ms"), number(r.host, "largest_delay_ticks"));
+      summary_number(r.plant, "sim_seconds"), summary_number(r.plant, "wall_seconds"),
+      summary_number(r.plant, "min_height"), summary_number(r.plant, "max_tilt"),
+      summary_number(r.host, "solves"), summary_number(r.host, "largest_solve_ms"),
+      summary_number(r.host, "largest_delay_ticks"));
   EXPECT_EQ(r.host.at("phase"), "mpc");
   EXPECT_EQ(r.host.at("board0_mode"), "run");
   EXPECT_EQ(r.host.at("board1_mode"), "run");
-  EXPECT_EQ(number(r.host, "rejected_frames"), 0);
+  EXPECT_EQ(summary_number(r.host, "rejected_frames"), 0);
   // When the MPC took over (the host's estimate log, a row every 6 ms), and from then on one
   // solve every 12 ms.
   const std::string estimate = hmpc::platform::read_file(r.dir + "estimate.csv");
@@ -70,17 +68,17 @@ TEST(HumanoidHil, BringsUpHoldsAndRunsTheMpcOnTheEstimateOverCan) {
   std::printf("the MPC took over at %.3f s\n", mpc_start);
   EXPECT_LT(mpc_start, kSeconds - 0.2);
   const double expected_solves = (kSeconds - mpc_start) / 0.012;
-  EXPECT_NEAR(number(r.host, "solves"), expected_solves, 2);
+  EXPECT_NEAR(summary_number(r.host, "solves"), expected_solves, 2);
   for (const Summary& b : r.boards) {
-    EXPECT_EQ(number(b, "heap_allocations_in_loop"), 0);
-    EXPECT_EQ(number(b, "rejected_frames"), 0);
+    EXPECT_EQ(summary_number(b, "heap_allocations_in_loop"), 0);
+    EXPECT_EQ(summary_number(b, "rejected_frames"), 0);
     EXPECT_EQ(b.at("mode"), "run");
   }
-  EXPECT_EQ(number(r.plant, "board_waits_timed_out"), 0);
-  EXPECT_EQ(number(r.plant, "rejected_frames"), 0);
+  EXPECT_EQ(summary_number(r.plant, "board_waits_timed_out"), 0);
+  EXPECT_EQ(summary_number(r.plant, "rejected_frames"), 0);
   // Upright: the torso within 0.1 rad of vertical, its origin within 3 cm of its standing height.
-  EXPECT_LT(number(r.plant, "max_tilt"), 0.1);
-  EXPECT_GT(number(r.plant, "min_height"), 0.78 - 0.03);
+  EXPECT_LT(summary_number(r.plant, "max_tilt"), 0.1);
+  EXPECT_GT(summary_number(r.plant, "min_height"), 0.78 - 0.03);
 
   // The robot bus's log holds the host's heartbeats, the boards' joint states and the IMU's
   // frames, each a valid candump line; the I/O bus's the Syncs.
@@ -124,7 +122,7 @@ TEST(HumanoidHil, BringsUpHoldsAndRunsTheMpcOnTheEstimateOverCan) {
       f.latency_max, f.lockstep_speed);
   std::printf("hip hold: the hip within %.1f mm of where the MPC took over, tilt up to %.3f rad\n",
               1e3 * f.hip_drift, f.max_tilt);
-  EXPECT_EQ(f.solves, int(number(r.host, "solves")));
+  EXPECT_EQ(f.solves, int(summary_number(r.host, "solves")));
   EXPECT_NEAR(f.mpc_start_s, mpc_start, 0.007);
   EXPECT_LT(f.height_rms, 0.01);
   EXPECT_LT(f.horizontal_velocity_rms, 0.05);
@@ -158,8 +156,9 @@ TEST(HumanoidHil, BringsUpHoldsAndRunsTheMpcOnTheEstimateOverCan) {
   EXPECT_EQ(replay.mismatches, 0u)
       << replay.first_mismatch << " at tick " << replay.first_mismatch_tick;
   EXPECT_EQ(replay.sent, replay.logged_sent);
-  EXPECT_EQ(double(replayed.solves().size()), number(r.host, "solves"));
-  EXPECT_NEAR(f.lockstep_speed, number(r.plant, "sim_seconds") / number(r.plant, "wall_seconds"),
+  EXPECT_EQ(double(replayed.solves().size()), summary_number(r.host, "solves"));
+  EXPECT_NEAR(f.lockstep_speed,
+              summary_number(r.plant, "sim_seconds") / summary_number(r.plant, "wall_seconds"),
               1e-9);
 }
 

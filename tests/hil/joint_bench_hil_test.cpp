@@ -50,10 +50,7 @@ std::string plant_trace(const std::string& log) {
   return out;
 }
 
-double number(const Summary& s, const std::string& key) {
-  const auto it = s.find(key);
-  return it == s.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
-}
+using hmpc::platform::summary_number;
 
 struct BenchRun {
   bool ok = false;
@@ -95,9 +92,10 @@ BenchRun run(const std::string& name, std::vector<std::string> board_args,
 
 void expect_clean(const BenchRun& r) {
   ASSERT_TRUE(r.ok) << r.error;
-  EXPECT_EQ(number(r.board, "heap_allocations_in_loop"), 0);
-  EXPECT_EQ(number(r.rig, "rejected_board_frames"), 0);  // every board frame passes the codec
-  EXPECT_EQ(number(r.board, "safe_outputs_sent"), 1);
+  EXPECT_EQ(summary_number(r.board, "heap_allocations_in_loop"), 0);
+  EXPECT_EQ(summary_number(r.rig, "rejected_board_frames"),
+            0);  // every board frame passes the codec
+  EXPECT_EQ(summary_number(r.board, "safe_outputs_sent"), 1);
 }
 
 // A 20 N·m step, then a 2 Hz sinusoid of 20 N·m, on the hanging leg (zeroed, held, then run at
@@ -109,16 +107,18 @@ TEST(JointBench, TracksATorqueStepAndA2HzSinusoid) {
   const BenchRun step = run("step", {}, {"--profile", "step", "--amplitude", "20"}, 4);
   expect_clean(step);
   std::printf("step 20 N·m: RMS error from 2 s %.3f N·m, largest %.3f\n",
-              number(step.rig, "rms_torque_error"), number(step.rig, "max_abs_torque_error"));
+              summary_number(step.rig, "rms_torque_error"),
+              summary_number(step.rig, "max_abs_torque_error"));
   EXPECT_EQ(step.rig.at("board_mode"), "run");
-  EXPECT_LT(number(step.rig, "rms_torque_error"), 1.0);
-  EXPECT_EQ(number(step.rig, "zeroed"), 1);
-  EXPECT_NEAR(number(step.rig, "encoder_offset"), 0.25, 2e-4);  // the rig's mounting offset
+  EXPECT_LT(summary_number(step.rig, "rms_torque_error"), 1.0);
+  EXPECT_EQ(summary_number(step.rig, "zeroed"), 1);
+  EXPECT_NEAR(summary_number(step.rig, "encoder_offset"), 0.25, 2e-4);  // the rig's mounting offset
 
   const BenchRun sine = run("sine", {}, {"--profile", "sine", "--amplitude", "20"}, 4);
   expect_clean(sine);
-  std::printf("2 Hz sinusoid 20 N·m: RMS error %.3f N·m\n", number(sine.rig, "rms_torque_error"));
-  EXPECT_LT(number(sine.rig, "rms_torque_error"), 5.0);
+  std::printf("2 Hz sinusoid 20 N·m: RMS error %.3f N·m\n",
+              summary_number(sine.rig, "rms_torque_error"));
+  EXPECT_LT(summary_number(sine.rig, "rms_torque_error"), 5.0);
 }
 
 // The leg released at 0.5 rad swings while the board follows a 2 Hz, 20 N·m sinusoid. Both
@@ -134,14 +134,14 @@ TEST(JointBench, LoadVelocityFeedbackHalvesTheErrorWhileTheLoadSwings) {
             {"--believed-actuator-scale", scale, "--no-load-velocity-feedback"}, rig, 4);
     expect_clean(lvf);
     expect_clean(pid);
-    const double e_lvf = number(lvf.rig, "rms_torque_error");
-    const double e_pid = number(pid.rig, "rms_torque_error");
+    const double e_lvf = summary_number(lvf.rig, "rms_torque_error");
+    const double e_pid = summary_number(pid.rig, "rms_torque_error");
     std::printf(
         "believed actuator constants x%s: RMS torque error PID %.3f N·m, PID with load-velocity "
         "feedback %.3f N·m (ratio %.2f); largest leg speed %.2f / %.2f rad/s\n",
-        scale, e_pid, e_lvf, e_lvf / e_pid, number(pid.rig, "max_abs_omega"),
-        number(lvf.rig, "max_abs_omega"));
-    EXPECT_GT(number(pid.rig, "max_abs_omega"), 0.5);  // the load does swing
+        scale, e_pid, e_lvf, e_lvf / e_pid, summary_number(pid.rig, "max_abs_omega"),
+        summary_number(lvf.rig, "max_abs_omega"));
+    EXPECT_GT(summary_number(pid.rig, "max_abs_omega"), 0.5);  // the load does swing
     EXPECT_LE(e_lvf, 0.5 * e_pid) << "constants x" << scale;
   }
 }
@@ -152,15 +152,15 @@ TEST(JointBench, LoadVelocityFeedbackHalvesTheErrorWhileTheLoadSwings) {
 TEST(JointBench, HeartbeatLossCentresTheValvesWithinTwoPeriodsOfTheTimeout) {
   const BenchRun r = run("silence", {}, {"--stop-heartbeat-at", "2"}, 3);
   expect_clean(r);
-  const double ticks = number(r.rig, "valves_centred_after_last_heartbeat_ticks");
-  const double timeout = number(r.board, "heartbeat_timeout_ticks");
+  const double ticks = summary_number(r.rig, "valves_centred_after_last_heartbeat_ticks");
+  const double timeout = summary_number(r.board, "heartbeat_timeout_ticks");
   std::printf("valves centred %.0f ticks after the last heartbeat (timeout %.0f ticks)\n", ticks,
               timeout);
   EXPECT_GT(timeout, 0);
   EXPECT_GT(ticks, timeout - 10);  // not before the timeout (a heartbeat period)
   EXPECT_LE(ticks, timeout + 2 * kControlPeriodTicks);
-  EXPECT_EQ(number(r.board, "watchdog_trips"), 1);
-  EXPECT_EQ(number(r.board, "stale_references"), 1);
+  EXPECT_EQ(summary_number(r.board, "watchdog_trips"), 1);
+  EXPECT_EQ(summary_number(r.board, "stale_references"), 1);
   EXPECT_EQ(r.board.at("mode"), "fault");
 }
 
@@ -171,9 +171,10 @@ TEST(JointBench, BadReferencesChangeNothing) {
   const BenchRun bad = run("bad", {}, {"--profile", "sine", "--bad-references-at", "2"}, 3);
   expect_clean(clean);
   expect_clean(bad);
-  EXPECT_EQ(number(bad.board, "refused_references"), 1);
-  EXPECT_EQ(number(bad.board, "rejected_frames"), 2);  // the replay and the stepped-back counter
-  EXPECT_EQ(number(clean.board, "rejected_frames"), 0);
+  EXPECT_EQ(summary_number(bad.board, "refused_references"), 1);
+  EXPECT_EQ(summary_number(bad.board, "rejected_frames"),
+            2);  // the replay and the stepped-back counter
+  EXPECT_EQ(summary_number(clean.board, "rejected_frames"), 0);
   EXPECT_GT(clean.log.size(), 3000u * 40);  // a row per millisecond
   EXPECT_TRUE(plant_trace(clean.log) == plant_trace(bad.log)) << "the plant's trace differs";
 }
@@ -183,11 +184,11 @@ TEST(JointBench, BadReferencesChangeNothing) {
 TEST(JointBench, EStopCentresTheValvesWithinOnePeriod) {
   const BenchRun r = run("estop", {}, {"--profile", "sine", "--estop-at", "2"}, 2.5);
   expect_clean(r);
-  const double ticks = number(r.rig, "valves_centred_after_estop_ticks");
+  const double ticks = summary_number(r.rig, "valves_centred_after_estop_ticks");
   std::printf("valves centred %.0f ticks after the E-stop was sent\n", ticks);
   EXPECT_GE(ticks, 0);  // the rig reports -1 when the valves never stayed centred
   EXPECT_LE(ticks, kControlPeriodTicks);
-  EXPECT_EQ(number(r.board, "estops"), 1);
+  EXPECT_EQ(summary_number(r.board, "estops"), 1);
   EXPECT_EQ(r.board.at("mode"), "fault");
 }
 

@@ -54,6 +54,17 @@ std::uint32_t ticks_until(HumanoidInProcess& robot, std::uint32_t limit, Done&& 
   return limit + 1;
 }
 
+// Ticks until the host is in its safe phase, at most `limit`; limit + 1 if it never was.
+std::uint32_t ticks_to_safe(HumanoidInProcess& robot, std::uint32_t limit) {
+  return ticks_until(robot, limit, [&] { return robot.host().phase() == HostPhase::kSafe; });
+}
+
+// Ticks until both boards are in `mode`, at most `limit`; limit + 1 if they never were.
+std::uint32_t ticks_to_both_in(HumanoidInProcess& robot, std::uint32_t limit, jp::BoardMode mode) {
+  return ticks_until(
+      robot, limit, [&] { return robot.board(0).mode() == mode && robot.board(1).mode() == mode; });
+}
+
 // The host's loop dies (SIGKILL): no reference, no heartbeat. Each board stops acting on the
 // last torques once they are stale (four 6 ms control periods) and holds its posture; then its
 // heartbeat watchdog (seven 10 ms heartbeat periods) trips and latches its safe state, valves
@@ -64,18 +75,12 @@ TEST(HumanoidFaults, TheHostDyingHasEveryBoardHoldThenCentreItsValves) {
   robot.kill_host();
   const auto& board = robot.board(0).config();
   const int stale = board.reference_timeout_periods * board.control_period_ticks;
-  const std::uint32_t held = ticks_until(robot, 200, [&] {
-    return robot.board(0).mode() == jp::BoardMode::kHold &&
-           robot.board(1).mode() == jp::BoardMode::kHold;
-  });
+  const std::uint32_t held = ticks_to_both_in(robot, 200, jp::BoardMode::kHold);
   // The last reference came at most one control period before the death, and a board looks
   // at its age once per control period.
   EXPECT_LE(held, std::uint32_t(stale + board.control_period_ticks + 1));
   EXPECT_GE(held + std::uint32_t(board.control_period_ticks), std::uint32_t(stale));
-  const std::uint32_t safe = held + ticks_until(robot, 200, [&] {
-                               return robot.board(0).mode() == jp::BoardMode::kFault &&
-                                      robot.board(1).mode() == jp::BoardMode::kFault;
-                             });
+  const std::uint32_t safe = held + ticks_to_both_in(robot, 200, jp::BoardMode::kFault);
   std::printf(
       "host killed: both boards hold after %u ticks (references stale after %d), safe after %u "
       "(heartbeat timeout %d); tilt %.3f rad\n",
@@ -98,16 +103,12 @@ TEST(HumanoidFaults, TheImuFallingSilentHandsTheRobotToTheBoardsHold) {
   run_to_mpc(robot);
   robot.silence_imu();
   const std::uint32_t silenced = robot.ticks();
-  const std::uint32_t took =
-      ticks_until(robot, 200, [&] { return robot.host().phase() == HostPhase::kSafe; });
+  const std::uint32_t took = ticks_to_safe(robot, 200);
   EXPECT_EQ(robot.host().reason(), "the IMU fell silent");
   const int timeout = robot.host().master().config().imu_timeout_ticks;
   EXPECT_LE(took, std::uint32_t(timeout + 1));
   EXPECT_GE(took + 6, std::uint32_t(timeout));
-  const std::uint32_t held = ticks_until(robot, 50, [&] {
-    return robot.board(0).mode() == jp::BoardMode::kHold &&
-           robot.board(1).mode() == jp::BoardMode::kHold;
-  });
+  const std::uint32_t held = ticks_to_both_in(robot, 50, jp::BoardMode::kHold);
   EXPECT_LE(held, 11u);  // the next heartbeat (10 ms) asks for hold
   robot.run(2.0);
   const double up = tilt(robot.plant().state());
@@ -126,8 +127,7 @@ TEST(HumanoidFaults, ABoardFallingSilentHandsTheOtherToItsHold) {
   run_to_mpc(robot);
   robot.kill_board(1);
   const std::uint32_t killed = robot.ticks();
-  const std::uint32_t took =
-      ticks_until(robot, 300, [&] { return robot.host().phase() == HostPhase::kSafe; });
+  const std::uint32_t took = ticks_to_safe(robot, 300);
   EXPECT_EQ(robot.host().reason(), "a leg board fell silent");
   const int timeout = robot.host().master().config().board_timeout_ticks;
   EXPECT_LE(took, std::uint32_t(timeout + 2));
@@ -151,8 +151,7 @@ TEST(HumanoidFaults, ARestartedBoardStopsTheMpcAndTheOtherHolds) {
   robot.restart_board(0);
   const std::uint32_t restarted = robot.ticks();
   const int timeout = robot.host().master().config().board_timeout_ticks;
-  const std::uint32_t took = ticks_until(robot, std::uint32_t(timeout + 2),
-                                         [&] { return robot.host().phase() == HostPhase::kSafe; });
+  const std::uint32_t took = ticks_to_safe(robot, std::uint32_t(timeout + 2));
   const std::string reason = robot.host().reason();
   EXPECT_TRUE(reason == "a leg board restarted: its encoders are not zeroed" ||
               reason == "a leg board fell silent")

@@ -11,6 +11,8 @@
 #include <string>
 
 #include "hmpc/humanoid/motion.hpp"
+#include "hmpc/platform/linux/candump_log.hpp"
+#include "hmpc/platform/linux/protocol_frames.hpp"
 
 namespace {
 
@@ -24,11 +26,11 @@ hmpc::humanoid::Motion hip_hold() {
 
 // A candump -l line as the host's log has it, stamped with `tick`.
 std::string line(std::uint32_t tick, const jp::Frame& f) {
-  char text[64];
-  int n = std::snprintf(text, sizeof text, "(%010u.%06u) vcan0 %03X#", tick / 1000,
-                        (tick % 1000) * 1000, unsigned(f.id));
-  for (int i = 0; i < f.dlc; ++i) n += std::snprintf(text + n, 4, "%02X", f.data[i]);
-  return std::string(text) + "\n";
+  char frame[32], text[64];
+  hmpc::platform::format_candump_frame(hmpc::platform::to_can_frame(f), frame);
+  std::snprintf(text, sizeof text, "(%010u.%06u) vcan0 %s\n", tick / 1000, (tick % 1000) * 1000,
+                frame);
+  return text;
 }
 
 // 300 ticks of a host waiting for its boards: what it sends, as its log has it.
@@ -41,13 +43,17 @@ std::string waiting_run() {
   return log;
 }
 
-TEST(HumanoidReplay, AHostsOwnRunReplaysFrameForFrame) {
-  const std::string log = waiting_run();
+// `log` replayed into a fresh host, which must take it.
+void replay(const std::string& log, ReplayReport& r) {
   HumanoidHost host(hmpc::host::HumanoidHostConfig{}, hip_hold());
   std::istringstream in(log);
-  ReplayReport r;
   std::string error;
   ASSERT_TRUE(hmpc::host::replay_lockstep_log(in, host, r, error)) << error;
+}
+
+TEST(HumanoidReplay, AHostsOwnRunReplaysFrameForFrame) {
+  ReplayReport r;
+  ASSERT_NO_FATAL_FAILURE(replay(waiting_run(), r));
   EXPECT_GT(r.logged_sent, 20u);  // heartbeats to both boards every 10 ms
   EXPECT_EQ(r.sent, r.logged_sent);
   EXPECT_EQ(r.mismatches, 0u) << r.first_mismatch;
@@ -61,23 +67,15 @@ TEST(HumanoidReplay, AChangedOrMissingFrameIsFoundOnItsTick) {
   ASSERT_NE(at, std::string::npos);
   const std::size_t end = log.find('\n', at);
   log[end - 1] = log[end - 1] == '0' ? '1' : '0';
-  {
-    HumanoidHost host(hmpc::host::HumanoidHostConfig{}, hip_hold());
-    std::istringstream in(log);
-    ReplayReport r;
-    std::string error;
-    ASSERT_TRUE(hmpc::host::replay_lockstep_log(in, host, r, error)) << error;
-    EXPECT_EQ(r.mismatches, 1u);
-    EXPECT_EQ(r.first_mismatch_tick, 150u);
-  }
+  ReplayReport changed;
+  ASSERT_NO_FATAL_FAILURE(replay(log, changed));
+  EXPECT_EQ(changed.mismatches, 1u);
+  EXPECT_EQ(changed.first_mismatch_tick, 150u);
   log.erase(at, end - at + 1);  // that frame gone from the log
-  HumanoidHost host(hmpc::host::HumanoidHostConfig{}, hip_hold());
-  std::istringstream in(log);
-  ReplayReport r;
-  std::string error;
-  ASSERT_TRUE(hmpc::host::replay_lockstep_log(in, host, r, error)) << error;
-  EXPECT_GE(r.mismatches, 1u);
-  EXPECT_EQ(r.first_mismatch_tick, 150u);
+  ReplayReport missing;
+  ASSERT_NO_FATAL_FAILURE(replay(log, missing));
+  EXPECT_GE(missing.mismatches, 1u);
+  EXPECT_EQ(missing.first_mismatch_tick, 150u);
 }
 
 TEST(HumanoidReplay, ALogThatIsNotOneIsRefused) {

@@ -79,8 +79,7 @@ bool read_board_log(const std::string& path, std::vector<BoardTickRow>& rows, st
 
 double HilRunResult::number(const std::map<std::string, std::string>& summary,
                             const std::string& key) const {
-  const auto it = summary.find(key);
-  return it == summary.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
+  return hmpc::platform::summary_number(summary, key);
 }
 
 HilRunResult run_hil(const HilRunSpec& spec, const HilPrograms& programs) {

@@ -59,11 +59,6 @@ double number(const Row& row, std::size_t i) {
   return i < row.size() ? std::strtod(row[i].c_str(), nullptr) : NAN;
 }
 
-double number(const Summary& s, const std::string& key) {
-  const auto it = s.find(key);
-  return it == s.end() ? NAN : std::strtod(it->second.c_str(), nullptr);
-}
-
 // The frames a candump -l log holds.
 std::size_t frames_in(const std::string& path) {
   std::istringstream in(hmpc::platform::read_file(path));
@@ -227,8 +222,8 @@ bool figures_of(const HumanoidHilRun& run, HumanoidHilFigures& out, std::string&
   out.horizontal_velocity_rms = std::sqrt(v2 / n);
   out.tilt_rms = std::sqrt(t2 / n);
 
-  const double simulated = number(run.plant, "sim_seconds");
-  const double wall = number(run.plant, "wall_seconds");
+  const double simulated = hmpc::platform::summary_number(run.plant, "sim_seconds");
+  const double wall = hmpc::platform::summary_number(run.plant, "wall_seconds");
   if (!(simulated > 0) || !(wall > 0)) {
     error = "the plant's summary has no simulated or wall time";
     return false;

@@ -74,9 +74,7 @@ int main(int argc, char** argv) {
   }
   const auto at = [](const hmpc::hil::Summary& s, const char* key) {
     const auto it = s.find(key);
-    if (it == s.end()) return std::string();
-    const std::string& v = it->second;  // a quoted value without its quotes
-    return v.size() >= 2 && v.front() == '"' && v.back() == '"' ? v.substr(1, v.size() - 2) : v;
+    return it == s.end() ? std::string() : it->second;
   };
   std::printf(
       "| solves | largest solve | over 12 ms | height RMS | horizontal velocity RMS | tilt RMS | "

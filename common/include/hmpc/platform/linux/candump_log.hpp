@@ -18,6 +18,15 @@
 
 namespace hmpc::platform {
 
+// A frame as candump -l writes it after the interface, "ID#DATA": the identifier in hex (three
+// digits for a standard one), the data bytes in hex. `out` holds the longest.
+inline void format_candump_frame(const CanFrame& frame, char (&out)[32]) {
+  int n = std::snprintf(out, sizeof out, "%03" PRIX32 "#", frame.id);
+  for (std::uint8_t i = 0; i < frame.dlc && i < 8; ++i) {
+    n += std::snprintf(out + n, sizeof out - std::size_t(n), "%02X", frame.data[i]);
+  }
+}
+
 class CandumpLog {
  public:
   CandumpLog() = default;
@@ -47,11 +56,10 @@ class CandumpLog {
   void write(double time_s, const char* interface, const CanFrame& frame) {
     if (!file_) return;
     const double whole = std::floor(time_s);
-    std::fprintf(file_, "(%010.0f.%06ld) %s %03" PRIX32 "#", whole,
-                 std::lround((time_s - whole) * 1e6) % 1000000, interface, frame.id);
-    for (std::uint8_t i = 0; i < frame.dlc && i < 8; ++i)
-      std::fprintf(file_, "%02X", frame.data[i]);
-    std::fputc('\n', file_);
+    char text[32];
+    format_candump_frame(frame, text);
+    std::fprintf(file_, "(%010.0f.%06ld) %s %s\n", whole,
+                 std::lround((time_s - whole) * 1e6) % 1000000, interface, text);
   }
 
  private:

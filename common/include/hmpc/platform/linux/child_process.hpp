@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -27,7 +29,8 @@ inline std::string read_file(const std::string& path) {
   return s.str();
 }
 
-// The key=value pairs of the last "<program>: summary ..." line in a program's output.
+// The key=value pairs of the last "<program>: summary ..." line in a program's output; a value
+// in double quotes (key="a reason with spaces") is taken whole, without its quotes.
 inline std::map<std::string, std::string> parse_summary(const std::string& text) {
   std::map<std::string, std::string> out;
   const std::size_t at = text.rfind(": summary ");
@@ -36,9 +39,23 @@ inline std::map<std::string, std::string> parse_summary(const std::string& text)
   std::string word;
   while (words >> word) {
     const std::size_t eq = word.find('=');
-    if (eq != std::string::npos) out[word.substr(0, eq)] = word.substr(eq + 1);
+    if (eq == std::string::npos) continue;
+    std::string value = word.substr(eq + 1);
+    if (!value.empty() && value.front() == '"') {
+      std::string more;
+      while ((value.size() < 2 || value.back() != '"') && words >> more) value += " " + more;
+      value = value.substr(1, value.size() >= 2 && value.back() == '"' ? value.size() - 2 : 0);
+    }
+    out[word.substr(0, eq)] = value;
   }
   return out;
+}
+
+// A summary's number under `key`; NaN when it has none.
+inline double summary_number(const std::map<std::string, std::string>& summary,
+                             const std::string& key) {
+  const auto it = summary.find(key);
+  return it == summary.end() ? std::nan("") : std::strtod(it->second.c_str(), nullptr);
 }
 
 // A program with its stdout in `output` and its stderr in `output`.err.
