@@ -5,6 +5,7 @@
 // setting (Sec. 2.7.3), streaming its torques to the boards. Paced by a 1 kHz timer, or in HIL
 // lock-step by the plant's Sync frames on the I/O bus (the host's clock; nothing else is read
 // there). Both buses are logged in candump -l format; at the end a summary of key=value pairs.
+// With --dds-domain it speaks DDS the ROS 2 way (hmpc/dds/humanoid_dds.hpp).
 #include <poll.h>
 #include <signal.h>
 #include <sys/timerfd.h>
@@ -24,6 +25,7 @@
 #include <vector>
 
 #include "hmpc/cli/arguments.hpp"
+#include "hmpc/dds/humanoid_dds.hpp"
 #include "hmpc/host/humanoid_host.hpp"
 #include "hmpc/host/humanoid_replay.hpp"
 #include "hmpc/humanoid/motion.hpp"
@@ -60,7 +62,9 @@ struct Options {
   double corrupt_at_s = -1, corrupt_s = 0.05;  // a burst of corrupted frames sent
   double estop_at_s = -1;
   double die_at_s = -1;
-  std::string replay;  // a lock-step run's robot bus log to replay, offline
+  std::string replay;    // a lock-step run's robot bus log to replay, offline
+  long dds_domain = -1;  // < 0: no DDS
+  bool dds_loopback = false;
 };
 
 void print_usage(std::FILE* out) {
@@ -72,6 +76,7 @@ void print_usage(std::FILE* out) {
       "         [--model-slip-velocity V] [--replay FILE]\n"
       "         [--log-dir DIR] [--drop-percent P] [--corrupt-at S] [--corrupt-ms MS]\n"
       "         [--seed N] [--estop-at S] [--fail-solver-at S] [--die-at S]\n"
+      "         [--dds-domain ID [--dds-loopback]]\n"
       "  --interface IFACE     the robot bus (default vcan0)\n"
       "  --io-interface IFACE  HIL: the I/O bus, whose Sync frames are the host's clock in\n"
       "                        lock-step, logged beside the robot bus\n"
@@ -103,6 +108,10 @@ void print_usage(std::FILE* out) {
       "  --estop-at S          the host sends the bus-wide E-stop at S\n"
       "  --fail-solver-at S    test hook: every solve from S on counts as failed\n"
       "  --die-at S            test hook: SIGKILL to itself at S\n"
+      "  --dds-domain ID       Cyclone DDS on this domain (0..230), the ROS 2 way: joints, IMU,\n"
+      "                        odometry, plans and diagnostics out; mode, task and cost-weight\n"
+      "                        commands in (topics under /hmpc/humanoid)\n"
+      "  --dds-loopback        DDS on 127.0.0.1 only, without multicast\n"
       "  --replay FILE         offline: a lock-step run's robot_bus.log into the host, on the\n"
       "                        ticks it came, each frame the host sends compared with the run's;\n"
       "                        give the run's options (motion, hold, paused, resume, slip\n"
@@ -160,8 +169,18 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
     o.replay = v;
     return {};
   });
+  p.integer("--dds-domain", 0, 230, o.dds_domain);
+  p.flag("--dds-loopback", o.dds_loopback);
   const auto outcome = p.parse(argc, argv, error);
   if (outcome != hmpc::cli::ParseOutcome::kRun) return outcome;
+  if (o.dds_loopback && o.dds_domain < 0) {
+    error = "--dds-loopback needs --dds-domain";
+    return hmpc::cli::ParseOutcome::kError;
+  }
+  if (!o.replay.empty() && o.dds_domain >= 0) {
+    error = "--replay runs offline: no --dds-domain";
+    return hmpc::cli::ParseOutcome::kError;
+  }
   if (o.lockstep && o.io_interface.empty()) {
     error = "--lockstep needs --io-interface (the plant's Sync frames are the host's clock)";
     return hmpc::cli::ParseOutcome::kError;
@@ -184,8 +203,9 @@ hmpc::cli::ParseOutcome parse(int argc, char** argv, Options& o, std::string& er
 // logs, one tick per host millisecond.
 class Program {
  public:
-  Program(const Options& o, HumanoidHost& host, SocketCan& robot, SocketCan* io)
-      : o_(o), host_(host), robot_(robot), io_(io), send_faults_(o.send_faults),
+  Program(const Options& o, HumanoidHost& host, SocketCan& robot, SocketCan* io,
+          hmpc::dds::HumanoidDdsBridge* dds)
+      : o_(o), host_(host), robot_(robot), io_(io), dds_(dds), send_faults_(o.send_faults),
         receive_faults_(o.receive_faults), corrupt_(o.send_faults.seed ^ 0xb17f11bULL) {}
 
   bool open_logs(std::string& error) {
@@ -254,7 +274,9 @@ class Program {
       estop_sent_ = true;
     }
     if (o_.resume_at_s >= 0 && t >= o_.resume_at_s) host_.resume_motion();
+    if (dds_) dds_->poll(host_);
     host_.tick(tick, true, [&](const jp::Frame& f) { send(f, t); });
+    if (dds_ && !dds_->publish(host_, tick)) ++dds_refused_;
     log_tick(tick, t);
   }
 
@@ -266,6 +288,7 @@ class Program {
   const hmpc::platform::FaultCounters& send_faults() const { return send_faults_.counters(); }
   const hmpc::platform::FaultCounters& receive_faults() const { return receive_faults_.counters(); }
   std::uint32_t current_tick() const { return tick_; }
+  std::uint64_t dds_refused() const { return dds_refused_; }
 
  private:
   void send(jp::Frame frame, double t) {
@@ -317,6 +340,7 @@ class Program {
   HumanoidHost& host_;
   SocketCan& robot_;
   SocketCan* io_;
+  hmpc::dds::HumanoidDdsBridge* dds_;
   hmpc::platform::FaultInjector send_faults_, receive_faults_;
   std::mt19937_64 corrupt_;
   jp::Receiver sync_receiver_{0};
@@ -327,6 +351,7 @@ class Program {
   std::uint32_t tick_ = 0;
   bool estop_sent_ = false;
   std::uint64_t sent_ = 0, interface_down_ = 0, transmit_failures_ = 0, corrupted_ = 0;
+  std::uint64_t dds_refused_ = 0;
 };
 
 enum class End { kDone, kSignal, kFailure, kBringUp };
@@ -472,9 +497,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::unique_ptr<HumanoidHost> host;
+  hm::Motion motion;
   try {
-    const hm::Motion motion =
-        hm::load_motion(hm::motion_path(options.motion, HMPC_HUMANOID_MOTIONS));
+    motion = hm::load_motion(hm::motion_path(options.motion, HMPC_HUMANOID_MOTIONS));
     host = std::make_unique<HumanoidHost>(options.host, motion);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
@@ -494,7 +519,19 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  Program program(options, *host, robot, options.io_interface.empty() ? nullptr : &io);
+  std::unique_ptr<hmpc::dds::HumanoidDdsBridge> dds;
+  if (options.dds_domain >= 0) {
+    try {
+      dds = std::make_unique<hmpc::dds::HumanoidDdsBridge>(
+          std::uint32_t(options.dds_domain),
+          hmpc::dds::HumanoidTaskLimits::around(motion.phases[0].height),
+          options.dds_loopback ? hmpc::dds::loopback_config() : std::string());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: DDS: %s\n", kProgram, e.what());
+      return 1;
+    }
+  }
+  Program program(options, *host, robot, options.io_interface.empty() ? nullptr : &io, dds.get());
   if (!program.open_logs(error)) {
     std::fprintf(stderr, "%s: %s\n", kProgram, error.c_str());
     return 1;
@@ -537,7 +574,9 @@ int main(int argc, char** argv) {
       "largest_delay_ticks=%u "
       "frames_sent=%llu rejected_frames=%llu sent_dropped=%llu received_dropped=%llu "
       "sent_corrupted=%llu interface_down=%llu transmit_failures=%llu board0_mode=%s "
-      "board1_mode=%s board0_faults=0x%04x board1_faults=0x%04x imu_frames=%u\n",
+      "board1_mode=%s board0_faults=0x%04x board1_faults=0x%04x imu_frames=%u "
+      "dds_commands=%llu dds_tasks=%llu dds_weights=%llu dds_rejected=%llu dds_rejects=%s "
+      "dds_commander_silences=%llu dds_refused=%llu\n",
       kProgram, program.current_tick(), wall_s, hmpc::host::name_of(host->phase()),
       host->reason().c_str(), charged.size(), charged.empty() ? 0.0 : charged.back(),
       charged.empty() ? 0.0 : charged[charged.size() / 2], long(over), host->largest_delay_ticks(),
@@ -551,6 +590,12 @@ int main(int argc, char** argv) {
       jp::value_name(jp::kBoardModeValues, std::uint32_t(m.board(0).status.mode)),
       jp::value_name(jp::kBoardModeValues, std::uint32_t(m.board(1).status.mode)),
       unsigned(m.board(0).status.faults), unsigned(m.board(1).status.faults),
-      m.readings().imu_frames);
+      m.readings().imu_frames, static_cast<unsigned long long>(dds ? dds->commands() : 0),
+      static_cast<unsigned long long>(dds ? dds->tasks() : 0),
+      static_cast<unsigned long long>(dds ? dds->weights() : 0),
+      static_cast<unsigned long long>(dds ? dds->rejects().total() : 0),
+      dds ? dds->rejects().summary().c_str() : "none",
+      static_cast<unsigned long long>(dds ? dds->commander_silences() : 0),
+      static_cast<unsigned long long>(program.dds_refused()));
   return status;
 }

@@ -93,8 +93,7 @@ HumanoidHost::~HumanoidHost() = default;
 
 double HumanoidHost::motion_time(std::uint32_t tick) const {
   if (motion_paused_) return 0.0;
-  const std::uint32_t from = config_.motion_paused ? motion_resumed_tick_ : mpc_start_tick_;
-  return tick >= from ? 1e-3 * double(tick - from) : 0.0;
+  return tick >= motion_start_tick_ ? 1e-3 * double(tick - motion_start_tick_) : 0.0;
 }
 
 void HumanoidHost::on_frame(const jp::Frame& frame, std::uint32_t tick) {
@@ -134,13 +133,43 @@ void HumanoidHost::estop() {
 }
 
 void HumanoidHost::hold() {
-  if (phase_ == HostPhase::kMpc || phase_ == HostPhase::kHolding) to_safe("asked to hold", true);
+  held_ = true;
+  run_asked_ = false;
+  if (phase_ != HostPhase::kMpc) return;
+  master_.stop_references();
+  master_.request(jp::RequestedMode::kHold);
+  phase_ = HostPhase::kHolding;
+  phase_tick_ = last_tick_;
+}
+
+void HumanoidHost::run() {
+  held_ = false;
+  run_asked_ = phase_ == HostPhase::kHolding;
 }
 
 void HumanoidHost::resume_motion() {
   if (!motion_paused_) return;
   motion_paused_ = false;
-  motion_resumed_tick_ = last_tick_;
+  motion_start_tick_ = last_tick_;
+}
+
+void HumanoidHost::set_task(const HipTask& task) {
+  hm::Phase phase;
+  phase.height = task.height;
+  if (task.squat) {
+    phase.squat_depth = task.depth;
+    phase.squat_period = task.period;
+  }
+  task_.phases[0] = phase;
+  task_.phase_count = 1;
+  task_changed_ = true;
+  motion_paused_ = false;
+  motion_start_tick_ = last_tick_;
+}
+
+void HumanoidHost::set_weights(const hm::CostWeights& weights) {
+  task_.weights = weights;
+  task_changed_ = true;
 }
 
 void HumanoidHost::to_safe(const char* reason, bool hold_posture) {
@@ -220,10 +249,14 @@ void HumanoidHost::step(std::uint32_t tick) {
       }
       break;
     case HostPhase::kHolding:
-      if (in_phase >= ticks_of(config_.hold_seconds) && estimator_started_) {
+      if (estimator_started_ &&
+          (run_asked_ || (!held_ && in_phase >= ticks_of(config_.hold_seconds)))) {
         mpc_ = std::make_unique<Mpc>(config_.threads, task_, estimator_.state(), config_.problem,
                                      config_.timing);
+        task_changed_ = false;
+        run_asked_ = false;
         mpc_start_tick_ = tick;
+        if (!motion_paused_) motion_start_tick_ = tick;
         enter(HostPhase::kMpc);
         solve(tick);
       }
@@ -264,6 +297,10 @@ void HumanoidHost::solve(std::uint32_t tick) {
     return;
   }
   auto& problem = m.solver->upper_problem();
+  if (task_changed_) {
+    problem.set_motion(task_);
+    task_changed_ = false;
+  }
   problem.set_start_time(motion_time(tick));
   if (m.current.valid) problem.set_applied_torque(plan_torque(tick));
   const Clock::time_point start = Clock::now();
@@ -306,6 +343,13 @@ void HumanoidHost::solve(std::uint32_t tick) {
   m.pending.tick = tick;
   m.pending.valid = true;
   m.pending_effective = record.effective_tick;
+  const auto& upper = m.solver->upper_solver();
+  for (int k = 0; k <= hm::kCoarseHorizon; ++k) plan_.states[std::size_t(k)] = upper.states()[k];
+  for (int k = 0; k < hm::kCoarseHorizon; ++k) plan_.torques[std::size_t(k)] = upper.controls()[k];
+  plan_.cost = m.solver->last_upper_result().cost;
+  plan_.status = m.solver->last_upper_result().status;
+  plan_.solve = record;
+  ++plan_.sequence;
 }
 
 }  // namespace hmpc::host

@@ -534,6 +534,30 @@ TEST(ProtocolCounters, RepeatedAndSkippedBackCountersAreStale) {
   EXPECT_EQ(send(15), DecodeResult::kOk);
 }
 
+// A sender that restarted counts from 0 again: stale to a receiver that heard it at 5, until
+// three of its frames in a row run on by 1, the third taken. A sender repeating one frame (a
+// frozen transmitter) never is, nor are stale frames whose counters jump about.
+TEST(ProtocolCounters, ASenderThatRestartedIsFollowedAfterThreeFramesRunningOn) {
+  Receiver receiver{6};
+  TrajectorySample out;
+  auto send = [&](std::uint8_t counter) {
+    return receiver.decode(valid_frame<TrajectorySample>(6, counter), out);
+  };
+  EXPECT_EQ(send(4), DecodeResult::kOk);
+  EXPECT_EQ(send(5), DecodeResult::kOk);
+  EXPECT_EQ(send(0), DecodeResult::kStaleCounter);  // restarted: 5 back
+  EXPECT_EQ(send(1), DecodeResult::kStaleCounter);
+  EXPECT_EQ(send(2), DecodeResult::kOk);  // the third running on
+  EXPECT_EQ(send(3), DecodeResult::kOk);
+  EXPECT_EQ(send(3), DecodeResult::kStaleCounter);  // then repeats, as ever
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(send(3), DecodeResult::kStaleCounter);
+  EXPECT_EQ(send(12), DecodeResult::kStaleCounter);  // 9 ahead
+  EXPECT_EQ(send(14), DecodeResult::kStaleCounter);  // runs on by 2, not 1
+  EXPECT_EQ(send(15), DecodeResult::kStaleCounter);
+  EXPECT_EQ(send(0), DecodeResult::kOk);  // 14, 15, 0: three running on
+  EXPECT_EQ(receiver.rejects.stale_counter, 26u);
+}
+
 TEST(ProtocolCounters, EachFrameTypeHasItsOwnSequence) {
   Receiver receiver{0};
   ModeCommand command;

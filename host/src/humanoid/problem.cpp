@@ -40,6 +40,17 @@ BasicStateCost<A>::BasicStateCost(const Motion& motion, const State& initial,
 }
 
 template <int A>
+void BasicStateCost<A>::set_motion(const Motion& motion) {
+  if (motion.reach.active != motion_.reach.active || motion.chair != motion_.chair ||
+      (motion.chair &&
+       (motion.seat_height != motion_.seat_height || motion.seat_x_min != motion_.seat_x_min ||
+        motion.seat_x_max != motion_.seat_x_max))) {
+    throw std::invalid_argument("humanoid: a new motion for a cost must keep its chair and reach");
+  }
+  motion_ = motion;
+}
+
+template <int A>
 BaseFeatures BasicStateCost<A>::features(const State& x) const {
   using Model = BasicModel<A>;
   BasicKinematics<A> kin;

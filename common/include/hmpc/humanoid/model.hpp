@@ -36,6 +36,13 @@ namespace hmpc::humanoid {
 constexpr int kBaseDofs = 6;
 constexpr int kLegJoints = 2 * kJointsPerLeg;  // 8
 
+// The leg joints' names in q's order, as the robot's topics carry them: the side, then the
+// joint as the thesis's weights name it (hip abduction HAA, hip flexion HFE, knee KFE, ankle
+// AFE).
+inline constexpr std::array<const char*, kLegJoints> kLegJointNames = {
+    "left_HAA",  "left_HFE",  "left_KFE",  "left_AFE",
+    "right_HAA", "right_HFE", "right_KFE", "right_AFE"};
+
 // The sizes of a variant with `ArmJoints` arm joints (0: the biped, 1: the reaching robot).
 template <int ArmJoints>
 struct Dimensions {

@@ -19,8 +19,11 @@
 //   byte 1 [3:0] rolling counter 0..15, one sequence per frame type and sender (Sender below).
 //                A receiver (CounterTracker) accepts the first counter it sees, then only
 //                advances of 1..7 modulo 16: 0 is a repeated frame, 8..15 is an old or
-//                reordered one. It must forget a frame type (CounterTracker::reset) when that
-//                frame times out, so a restarted sender is heard again.
+//                reordered one. Stale frames whose own counters run on by 1, three in a row,
+//                are a sender that restarted (its counters from 0) or lost more than 7 in a
+//                row: the receiver takes the third and follows them. A frozen sender repeating
+//                its frame stays stale. A receiver forgets a frame type
+//                (CounterTracker::reset) when that frame times out.
 // Frames to the host carry the same protection, so the host can reject corrupt telemetry too.
 //
 // Signals are little-endian (Intel, DBC "@1"); start bits count from bit 0 of byte 0. Bits
@@ -766,24 +769,41 @@ class CounterTracker {
  public:
   using FrameType = typename P::FrameType;
 
-  // kOk (and remembers counter) for the first frame of a type or an advance of
-  // 1..kMaxCounterAdvance; kStaleCounter for a repeat or a step back.
+  // kOk (and remembers counter) for the first frame of a type, an advance of
+  // 1..kMaxCounterAdvance, or the kResyncStaleRun-th stale frame in a row whose counters run
+  // on by 1; kStaleCounter for a repeat or a step back.
   constexpr DecodeResult accept(FrameType type, std::uint8_t counter) {
     const std::size_t i = index_of(type);
     if (synced_[i]) {
-      const unsigned advance = (unsigned{counter} + kCounterModulo - last_[i]) % kCounterModulo;
-      if (advance == 0 || advance > kMaxCounterAdvance) return DecodeResult::kStaleCounter;
+      const unsigned advance = step(last_[i], counter);
+      if (advance == 0 || advance > kMaxCounterAdvance) {
+        stale_run_[i] =
+            stale_run_[i] > 0 && step(last_stale_[i], counter) == 1 ? stale_run_[i] + 1 : 1;
+        last_stale_[i] = counter;
+        if (stale_run_[i] < kResyncStaleRun) return DecodeResult::kStaleCounter;
+      }
     }
     synced_[i] = true;
     last_[i] = counter;
+    stale_run_[i] = 0;
     return DecodeResult::kOk;
   }
   constexpr void reset(FrameType type) { synced_[index_of(type)] = false; }
   constexpr void reset_all() { synced_ = {}; }
 
+  // Three: two frames running on from a stale one could still be chance (1 in 16 each); a
+  // restarted joint board's status (every 20 ms) is then heard within 60 ms, before the
+  // 100 ms after which the host takes a board for silent.
+  static constexpr std::uint8_t kResyncStaleRun = 3;
+
  private:
+  static constexpr unsigned step(std::uint8_t from, std::uint8_t to) {
+    return (unsigned{to} + kCounterModulo - from) % kCounterModulo;
+  }
   std::array<std::uint8_t, frame_type_count<P>()> last_{};
   std::array<bool, frame_type_count<P>()> synced_{};  // a counter of the type has been accepted
+  std::array<std::uint8_t, frame_type_count<P>()> last_stale_{};
+  std::array<std::uint8_t, frame_type_count<P>()> stale_run_{};  // stale frames running on
 };
 
 struct RejectCounters {

@@ -12,8 +12,9 @@
 //             reports zeroed
 //   holding   the boards hold the posture under their PID (Sec. 2.7.3: "the robot first holds
 //             its posture"); the estimator starts from the first rest_seconds of it
-//   mpc       after hold_seconds (the thesis: 10 s), the MPC's plans as torque references, the
-//             boards in run
+//   mpc       after hold_seconds (the thesis: 10 s) or when an operator says run, the MPC's
+//             plans as torque references, the boards in run; an operator's hold takes the robot
+//             back to holding, where it stays until run
 //   safe      the boards hold their posture (an estimate lost, three failed solves in a row) or
 //             are in fault (an E-stop, a board's fault): no more references
 //
@@ -25,6 +26,7 @@
 // plan goes on.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -62,7 +64,7 @@ struct HumanoidHostConfig {
   bool truncate = false;  // stop a solve at the sampling period by wall clock (real time)
   SolveTime solve_time = SolveTime::kWall;
   // The motion's clock runs from the MPC's start; paused, it stays at 0 until resume_motion()
-  // (a task that starts on a command: the squat).
+  // or set_task() (a task that starts on a command: the squat).
   bool motion_paused = false;
   double fail_solver_at_s = -1;  // test hook: every solve from then on counts as failed
 };
@@ -76,6 +78,27 @@ struct SolveRecord {
   int upper_iterations = 0, fast_iterations = 0;
   bool usable = false;
   double motion_time = 0;  // s, the motion's clock
+};
+
+// The plan of the last usable solve over the upper layer's horizon (one upper step apart from
+// the solve's state), as an operator sees it.
+struct PlannedMotion {
+  std::array<humanoid::StateVector, humanoid::kCoarseHorizon + 1> states{};
+  std::array<humanoid::JointVector, humanoid::kCoarseHorizon> torques{};
+  double cost = 0;
+  SolveStatus status = SolveStatus::kInvalidInput;
+  SolveRecord solve;
+  std::uint32_t sequence = 0;  // usable solves so far; 0: none yet
+};
+
+// An operator's task for the MPC (Sec. 2.7.3's): hold the hip at `height`, or squat from there
+// `depth` deep each `period` (the squat of motion.hpp), from when it is set. The hip's
+// horizontal position stays where the MPC began.
+struct HipTask {
+  bool squat = false;
+  double height = 0;  // m
+  double depth = 0;   // m
+  double period = 0;  // s
 };
 
 class HumanoidHost {
@@ -98,16 +121,25 @@ class HumanoidHost {
     master_.tick(tick, heartbeat_enabled, send);
   }
 
-  // Commands (operator, DDS): the bus-wide E-stop; back to the boards' posture hold; the paused
-  // motion's clock started.
+  // Commands (operator, DDS): the bus-wide E-stop; back to the boards' posture hold (until
+  // run); from holding to the MPC now (once the estimator runs); the paused motion's clock
+  // started.
   void estop();
   void hold();
+  void run();
   void resume_motion();
+  // From the next solve on (between solves): a new task, its clock starting now; the cost's
+  // weights (e.g. learned by inverse optimal control).
+  void set_task(const HipTask& task);
+  void set_weights(const humanoid::CostWeights& weights);
+  // The motion the MPC pursues, with the operator's task and weights.
+  const humanoid::Motion& task() const { return task_; }
   // Simulation only: the MPC solves from *state (the plant's truth) instead of the estimate,
   // which still runs; nullptr restores the estimate. To tell what the estimator does to an
   // outcome from what the rest of the chain does (as hmpc-humanoid --estimator truth).
   void solve_from(const humanoid::BasicState<0>* state) { solve_from_ = state; }
 
+  const HumanoidHostConfig& config() const { return config_; }
   HostPhase phase() const { return phase_; }
   // Why the host is in kSafe, or why bring-up failed; empty otherwise.
   const std::string& reason() const { return reason_; }
@@ -121,6 +153,7 @@ class HumanoidHost {
   const std::vector<SolveRecord>& solves() const { return solves_; }
   // Ticks from a solve's start to its plan's effect, largest so far.
   std::uint32_t largest_delay_ticks() const { return largest_delay_; }
+  const PlannedMotion& last_plan() const { return plan_; }
   double motion_time(std::uint32_t tick) const;
 
  private:
@@ -147,7 +180,11 @@ class HumanoidHost {
   bool have_imu_ = false;
   std::uint32_t mpc_start_tick_ = 0;
   bool motion_paused_ = false;
-  std::uint32_t motion_resumed_tick_ = 0;
+  std::uint32_t motion_start_tick_ = 0;
+  bool task_changed_ = false;  // the cost takes task_ at the next solve
+  bool run_asked_ = false;     // an operator's run, until the MPC starts
+  bool held_ = false;          // an operator's hold: no MPC until run
+  PlannedMotion plan_;
   int failed_solves_ = 0;
   const humanoid::BasicState<0>* solve_from_ = nullptr;
   std::vector<SolveRecord> solves_;

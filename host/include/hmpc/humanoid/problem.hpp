@@ -128,8 +128,8 @@ struct BaseFeatures {
 template <int A>
 constexpr int kCostResiduals = 36 + 3 * A;
 
-// The state cost of Sec. 4.3.1 for one motion. Immutable after construction; every function
-// is safe to call from several threads.
+// The state cost of Sec. 4.3.1 for one motion. Every const function is safe to call from
+// several threads; set_motion only between solves.
 template <int ArmJoints>
 class BasicStateCost {
  public:
@@ -145,6 +145,10 @@ class BasicStateCost {
   BasicStateCost(const Motion& motion, const State& initial, const ProblemConfig& config);
 
   const Motion& motion() const { return motion_; }
+  // New targets and weights for the next solve (an operator's task or learned weights): the
+  // motion's phases and weights. Its chair, gait and reach must be those the cost was built
+  // with, since they shape the model; std::invalid_argument otherwise.
+  void set_motion(const Motion& motion);
   BaseFeatures features(const State& x) const;
   CostResidual residual(const StateVector& x, double time) const;
   double value(const StateVector& x, double time) const { return residual(x, time).squaredNorm(); }
@@ -257,6 +261,7 @@ class HumanoidProblem
 
   const ProblemConfig& config() const { return config_; }
   const BasicStateCost<ArmJoints>& cost() const { return cost_; }
+  void set_motion(const Motion& motion) { cost_.set_motion(motion); }
   // Time of the horizon's first state in the motion's schedule [s].
   void set_start_time(double t) { start_time_ = t; }
   double start_time() const { return start_time_; }

@@ -32,10 +32,6 @@ namespace hmpc::dds {
 namespace proto = hmpc::forearm_protocol;
 
 inline constexpr const char* kJointName = "elbow";
-// A commander repeats its ModeCommand within this (the command topic's deadline and liveliness
-// lease); half a second of silence is long enough not to trip on a busy machine and short
-// enough that a lost operator is noticed before the arm has gone far.
-inline constexpr double kCommandDeadlineS = 0.5;
 // Target trajectories the host holds.
 inline constexpr std::size_t kMaxTrajectoryPoints = trajectory::kMaxPoints;
 // The board's diagnostics go out when they change, and at least this often (ROS 2's

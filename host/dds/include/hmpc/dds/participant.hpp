@@ -20,6 +20,11 @@ enum class QosProfile {
   kCommand,     // reliable, keep last 10, volatile, deadline and automatic liveliness
 };
 
+// A commander repeats its ModeCommand within this (the command topics' deadline and liveliness
+// lease); half a second of silence is long enough not to trip on a busy machine and short
+// enough that a lost operator is noticed before the robot has gone far.
+inline constexpr double kCommandDeadlineS = 0.5;
+
 struct Qos {
   QosProfile profile = QosProfile::kDefault;
   double deadline_s = 0;  // kCommand only: the longest gap between two samples
