@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hmpc/dds/bridge.hpp"
 #include "hmpc/dds/cost_weights.hpp"
 #include "hmpc/dds/endpoint.hpp"
 #include "hmpc/models/forearm_target_range.hpp"
@@ -40,12 +41,6 @@ struct Topics {
   std::string joint_states, telemetry, command, joint_trajectory, cost_weights;
   std::string diagnostics = "/diagnostics";
 };
-
-std::string namespace_or_default(const std::string& ros_namespace, proto::NodeId node) {
-  std::string ns = ros_namespace.empty() ? default_namespace(node) : ros_namespace;
-  dds_topic_name(ns);  // throws std::invalid_argument for a bad name
-  return ns;
-}
 
 // What the diagnostics report, compared raw every publish (every 4 ms: no strings then) and
 // written out only when it changed or is due.
@@ -131,9 +126,7 @@ struct ForearmDdsBridge::Impl {
   }
 
   void reject(const char* what, const Verdict& verdict) {
-    rejects.add(verdict.reason);
-    std::fprintf(stderr, "hmpc-forearm-dds: %s rejected a %s: %s: %s\n", ros_namespace.c_str(),
-                 what, rejection_name(verdict.reason), verdict.detail.c_str());
+    log_rejection(rejects, "hmpc-forearm-dds", ros_namespace, what, verdict);
   }
 
   bool publish_diagnostics(const ForearmStateSample& s, double now) {
@@ -152,18 +145,10 @@ struct ForearmDdsBridge::Impl {
         faulted ? "fault " + text[1]
                 : text[0] +
                       (s.telemetry.mode == proto::BoardMode::kRun ? ", " + text[2] : std::string());
-    msg::DiagnosticStatus status{};
-    status.level =
-        static_cast<std::uint8_t>(faulted ? DiagnosticLevel::kError : DiagnosticLevel::kOk);
-    status.name = borrow(diagnostic_name.c_str());
-    status.message = borrow(message.c_str());
-    status.hardware_id = borrow(hardware_id.c_str());
-    status.values = borrow<decltype(status.values)>(values.data(), values.size());
-    msg::DiagnosticArray array{};
-    array.header.stamp = from_seconds<msg::Time>(now);
-    array.header.frame_id = borrow("");
-    array.status = borrow<decltype(array.status)>(&status, 1);
-    return diagnostics.write(array);
+    return write_diagnostics(diagnostics, now,
+                             faulted ? DiagnosticLevel::kError : DiagnosticLevel::kOk,
+                             diagnostic_name.c_str(), message.c_str(), hardware_id.c_str(),
+                             values.data(), values.size());
   }
 
   proto::NodeId node;
@@ -181,10 +166,7 @@ struct ForearmDdsBridge::Impl {
   RejectCounters rejects;
   DiagnosticsState last_diagnostics{};
   double next_diagnostics_s = 0;
-  std::uint32_t deadline_misses = 0;
-  dds_instance_handle_t commander = 0;  // the writer of the last accepted command
-  bool commanded = false;               // a command came since the last silence
-  std::uint64_t silences = 0;
+  CommanderWatch commander;  // every command's writer is in charge until it falls silent
 };
 
 ForearmDdsBridge::ForearmDdsBridge(std::uint32_t domain_id, proto::NodeId node,
@@ -193,8 +175,8 @@ ForearmDdsBridge::ForearmDdsBridge(std::uint32_t domain_id, proto::NodeId node,
     throw std::invalid_argument("forearm node " + std::to_string(node) + " is outside 0.." +
                                 std::to_string(proto::kMaxNodeId));
   }
-  impl_ =
-      std::make_unique<Impl>(domain_id, node, config, namespace_or_default(ros_namespace, node));
+  impl_ = std::make_unique<Impl>(domain_id, node, config,
+                                 namespace_or(ros_namespace, default_namespace(node)));
 }
 
 ForearmDdsBridge::~ForearmDdsBridge() = default;
@@ -207,13 +189,7 @@ bool ForearmDdsBridge::publish(const ForearmStateSample& s) {
   const double position[] = {s.theta};
   const double velocity[] = {s.theta_dot};
   const double effort[] = {s.telemetry.tau_p + s.telemetry.tau_m};
-  msg::JointState joint{};
-  joint.header.stamp = stamp;
-  joint.header.frame_id = borrow("");
-  joint.name = borrow(names, 1);
-  joint.position = borrow(position, 1);
-  joint.velocity = borrow(velocity, 1);
-  joint.effort = borrow(effort, 1);
+  const msg::JointState joint = joint_state(stamp, names, position, velocity, effort, 1);
 
   const ForearmTelemetrySample& t = s.telemetry;
   msg::ForearmTelemetry m{};
@@ -247,8 +223,7 @@ void ForearmDdsBridge::poll(const ForearmDdsHandlers& handlers) {
     if (!v.ok) return d.reject("ModeCommand", v);
     std::uint32_t strategy = 0;
     proto::value_of(proto::kStrategyValues, c.strategy, strategy);
-    d.commanded = true;
-    d.commander = info.publication_handle;
+    d.commander.took_charge(info.publication_handle);
     if (handlers.command) {
       handlers.command({c.sequence_number, static_cast<proto::RequestedMode>(c.mode),
                         static_cast<proto::Strategy>(strategy), c.clear_faults});
@@ -288,15 +263,7 @@ void ForearmDdsBridge::poll(const ForearmDdsHandlers& handlers) {
     }
     if (handlers.weights) handlers.weights(out);
   });
-  // A silent commander: a deadline passed without a command (a process that hangs, or whose
-  // liveliness lapsed), or the writer of the last command left (a process that ended or died;
-  // other writers, e.g. a second operator's, come and go without effect).
-  const std::uint32_t misses = d.commands.deadline_misses();
-  const bool silent = misses > d.deadline_misses || !d.commands.matched(d.commander);
-  d.deadline_misses = misses;
-  if (silent && d.commanded) {
-    d.commanded = false;
-    ++d.silences;
+  if (d.commander.fell_silent(d.commands)) {
     std::fprintf(stderr, "hmpc-forearm-dds: %s: the commander fell silent\n",
                  d.ros_namespace.c_str());
     if (handlers.commander_silent) handlers.commander_silent();
@@ -304,7 +271,7 @@ void ForearmDdsBridge::poll(const ForearmDdsHandlers& handlers) {
 }
 
 const RejectCounters& ForearmDdsBridge::rejects() const { return impl_->rejects; }
-std::uint64_t ForearmDdsBridge::commander_silences() const { return impl_->silences; }
+std::uint64_t ForearmDdsBridge::commander_silences() const { return impl_->commander.silences(); }
 const std::string& ForearmDdsBridge::ros_namespace() const { return impl_->ros_namespace; }
 
 TrajectorySample::TrajectorySample(std::vector<trajectory::TrajectoryPoint> points)
@@ -352,7 +319,8 @@ struct ForearmDdsClient::Impl {
 
 ForearmDdsClient::ForearmDdsClient(std::uint32_t domain_id, proto::NodeId node,
                                    const std::string& config, const std::string& ros_namespace)
-    : impl_(std::make_unique<Impl>(domain_id, config, namespace_or_default(ros_namespace, node))) {}
+    : impl_(std::make_unique<Impl>(domain_id, config,
+                                   namespace_or(ros_namespace, default_namespace(node)))) {}
 
 ForearmDdsClient::~ForearmDdsClient() = default;
 

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <utility>
 
+#include "hmpc/dds/bridge.hpp"
 #include "hmpc/dds/endpoint.hpp"
 #include "hmpc/humanoid/model.hpp"
 #include "hmpc/ioc/weights.hpp"
@@ -23,8 +24,7 @@ namespace jp = hmpc::joint_protocol;
 using host::HostPhase;
 using host::HumanoidHost;
 
-constexpr double kDiagnosticsPeriodS = 1.0;  // ROS 2's diagnostic_updater: once a second
-constexpr double kMaxWeight = 1e6;           // see humanoid_weight_limits()
+constexpr double kMaxWeight = 1e6;  // see humanoid_weight_limits()
 
 struct Topics {
   explicit Topics(const std::string& ns)
@@ -34,12 +34,6 @@ struct Topics {
   std::string joint_states, imu, odometry, plan, command, task, cost_weights;
   std::string diagnostics = "/diagnostics";
 };
-
-std::string namespace_or_default(const std::string& ros_namespace) {
-  std::string ns = ros_namespace.empty() ? std::string(kHumanoidNamespace) : ros_namespace;
-  dds_topic_name(ns);  // throws std::invalid_argument for a bad name
-  return ns;
-}
 
 // Eigen's fixed matrices into a message's row-major covariance.
 template <class Matrix, std::size_t N>
@@ -176,21 +170,13 @@ struct HumanoidDdsBridge::Impl {
   }
 
   void reject(const char* what, const Verdict& verdict) {
-    rejects.add(verdict.reason);
-    std::fprintf(stderr, "hmpc-humanoid-dds: %s rejected a %s: %s: %s\n", ros_namespace.c_str(),
-                 what, rejection_name(verdict.reason), verdict.detail.c_str());
+    log_rejection(rejects, "hmpc-humanoid-dds", ros_namespace, what, verdict);
   }
 
   bool publish_state(const HumanoidHost& host, const msg::Time& stamp) {
     const host::RobotReadings& r = host.master().readings();
-    msg::JointState joint{};
-    joint.header.stamp = stamp;
-    joint.header.frame_id = borrow("");
-    joint.name = borrow(hm::kLegJointNames.data(), hm::kLegJoints);
-    joint.position = borrow(r.angle.data(), hm::kLegJoints);
-    joint.velocity = borrow(r.rate.data(), hm::kLegJoints);
-    joint.effort = borrow(r.torque.data(), hm::kLegJoints);
-    bool ok = joint_states.write(joint);
+    bool ok = joint_states.write(joint_state(stamp, hm::kLegJointNames.data(), r.angle.data(),
+                                             r.rate.data(), r.torque.data(), hm::kLegJoints));
     if (!host.estimating()) return ok;
     const estimation::InvariantEkf& filter = host.estimator().filter();
     const estimation::BaseEstimate e = filter.estimate();
@@ -272,7 +258,7 @@ struct HumanoidDdsBridge::Impl {
     state.trust = host.estimating() ? host.estimator().filter().trust() : estimation::Trust::kLost;
     state.bring_up_failed = host.bring_up_failed();
     state.rejected = rejects.total();
-    state.silences = silences;
+    state.silences = commander.silences();
     if (now < next_diagnostics_s && state == last_diagnostics) return true;
     last_diagnostics = state;
     next_diagnostics_s = now + kDiagnosticsPeriodS;
@@ -295,17 +281,10 @@ struct HumanoidDdsBridge::Impl {
     const bool safe = state.phase == HostPhase::kSafe;
     const std::string message =
         safe ? std::string("safe: ") + host.reason() : std::string(host::name_of(state.phase));
-    msg::DiagnosticStatus status{};
-    status.level = static_cast<std::uint8_t>(safe ? DiagnosticLevel::kError : DiagnosticLevel::kOk);
-    status.name = borrow(diagnostic_name.c_str());
-    status.message = borrow(message.c_str());
-    status.hardware_id = borrow("humanoid host controller");
-    status.values = borrow<decltype(status.values)>(values.data(), values.size());
-    msg::DiagnosticArray array{};
-    array.header.stamp = from_seconds<msg::Time>(now);
-    array.header.frame_id = borrow("");
-    array.status = borrow<decltype(array.status)>(&status, 1);
-    return diagnostics.write(array);
+    return write_diagnostics(diagnostics, now,
+                             safe ? DiagnosticLevel::kError : DiagnosticLevel::kOk,
+                             diagnostic_name.c_str(), message.c_str(), "humanoid host controller",
+                             values.data(), values.size());
   }
 
   std::string ros_namespace;
@@ -332,16 +311,15 @@ struct HumanoidDdsBridge::Impl {
   std::uint32_t last_imu_tick = 0;
   bool imu_published = false;
   std::uint32_t plan_sequence = 0;
-  std::uint32_t deadline_misses = 0;
-  dds_instance_handle_t commander = 0;  // the writer of the last accepted run
-  bool commanded = false;               // a run came since the last silence
-  std::uint64_t silences = 0, accepted_commands = 0, accepted_tasks = 0, accepted_weights = 0;
+  CommanderWatch commander;  // the writer of the last run is in charge
+  std::uint64_t accepted_commands = 0, accepted_tasks = 0, accepted_weights = 0;
 };
 
 HumanoidDdsBridge::HumanoidDdsBridge(std::uint32_t domain_id, const HumanoidTaskLimits& limits,
                                      const std::string& config, const std::string& ros_namespace,
                                      double command_deadline_s)
-    : impl_(std::make_unique<Impl>(domain_id, limits, config, namespace_or_default(ros_namespace),
+    : impl_(std::make_unique<Impl>(domain_id, limits, config,
+                                   namespace_or(ros_namespace, kHumanoidNamespace),
                                    command_deadline_s)) {}
 
 HumanoidDdsBridge::~HumanoidDdsBridge() = default;
@@ -378,16 +356,15 @@ void HumanoidDdsBridge::poll(HumanoidHost& host) {
     ++d.accepted_commands;
     switch (static_cast<CommandMode>(c.mode)) {
       case CommandMode::kIdle:
-        d.commanded = false;
+        d.commander.released();
         host.estop();
         break;
       case CommandMode::kHold:
-        d.commanded = false;
+        d.commander.released();
         host.hold();
         break;
       case CommandMode::kRun:
-        d.commanded = true;
-        d.commander = info.publication_handle;
+        d.commander.took_charge(info.publication_handle);
         host.run();
         break;
     }
@@ -434,14 +411,8 @@ void HumanoidDdsBridge::poll(HumanoidHost& host) {
     ++d.accepted_weights;
     host.set_weights(ioc::with_weights(out, learned));
   });
-  // The commander who sent run fell silent: its deadline passed without a command, or its
-  // writer left. The robot goes back to its boards' hold.
-  const std::uint32_t misses = d.commands.deadline_misses();
-  const bool silent = misses > d.deadline_misses || !d.commands.matched(d.commander);
-  d.deadline_misses = misses;
-  if (silent && d.commanded) {
-    d.commanded = false;
-    ++d.silences;
+  // The commander who sent run fell silent: the robot goes back to its boards' hold.
+  if (d.commander.fell_silent(d.commands)) {
     std::fprintf(stderr, "hmpc-humanoid-dds: %s: the commander fell silent; holding\n",
                  d.ros_namespace.c_str());
     host.hold();
@@ -452,7 +423,7 @@ const RejectCounters& HumanoidDdsBridge::rejects() const { return impl_->rejects
 std::uint64_t HumanoidDdsBridge::commands() const { return impl_->accepted_commands; }
 std::uint64_t HumanoidDdsBridge::tasks() const { return impl_->accepted_tasks; }
 std::uint64_t HumanoidDdsBridge::weights() const { return impl_->accepted_weights; }
-std::uint64_t HumanoidDdsBridge::commander_silences() const { return impl_->silences; }
+std::uint64_t HumanoidDdsBridge::commander_silences() const { return impl_->commander.silences(); }
 const std::string& HumanoidDdsBridge::ros_namespace() const { return impl_->ros_namespace; }
 
 }  // namespace hmpc::dds

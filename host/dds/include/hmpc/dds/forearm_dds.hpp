@@ -34,9 +34,6 @@ namespace proto = hmpc::forearm_protocol;
 inline constexpr const char* kJointName = "elbow";
 // Target trajectories the host holds.
 inline constexpr std::size_t kMaxTrajectoryPoints = trajectory::kMaxPoints;
-// The board's diagnostics go out when they change, and at least this often (ROS 2's
-// diagnostic_updater publishes once a second).
-inline constexpr double kDiagnosticsPeriodS = 1.0;
 
 // "/hmpc/forearm_<node>".
 std::string default_namespace(proto::NodeId node);
